@@ -1,0 +1,53 @@
+"""Contact damping laws of the Hertz family.
+
+Every law here gives the damping factor of ``F_c = k_h delta^1.5 (1 + c_h v)`` as
+``c_h = factor(e) / v_imp`` [s/m], with ``e`` the coefficient of restitution and ``v_imp``
+the approach velocity [m/s] (MODEL.md):
+
+- Lankarani-Nikravesh: ``3 (1 - e^2) / 4`` (the paper's law, Eq. 7 corrected);
+- Hunt-Crossley: ``3 (1 - e) / 2``;
+- Flores et al.: ``8 (1 - e) / (5 e)``;
+- Gonthier et al.: ``(1 - e^2) / e``.
+
+The approach velocity is either fixed (the paper holds it at 1.76e-3 m/s) or latched from
+each impact's own velocity at first touch (the textbook use of these laws).
+"""
+
+from __future__ import annotations
+
+CONTACT_LAWS = {
+    "lankarani_nikravesh": lambda e: 0.75 * (1.0 - e * e),
+    "hunt_crossley": lambda e: 1.5 * (1.0 - e),
+    "flores": lambda e: 8.0 * (1.0 - e) / (5.0 * e),
+    "gonthier": lambda e: (1.0 - e * e) / e,
+}
+
+IMPACT_VELOCITY_MODES = ("fixed", "latched")
+
+
+def damping_factor(law: str, restitution: float) -> float:
+    """Dimensionless factor ``c_h v_imp`` of a contact law. [-]
+
+    Parameters
+    ----------
+    law : str
+        A key of :data:`CONTACT_LAWS`.
+    restitution : float
+        Coefficient of restitution e, in (0, 1]. [-]
+    """
+    return CONTACT_LAWS[law](restitution)
+
+
+def contact_damping(law: str, restitution: float, impact_velocity: float) -> float:
+    """Contact damping ``c_h = factor(e) / v_imp``. [s/m]
+
+    Parameters
+    ----------
+    law : str
+        A key of :data:`CONTACT_LAWS`.
+    restitution : float
+        Coefficient of restitution e, in (0, 1]. [-]
+    impact_velocity : float
+        Approach velocity v_imp, > 0. [m/s]
+    """
+    return damping_factor(law, restitution) / impact_velocity

@@ -1,0 +1,380 @@
+"""The fixed-step RK4 kernel: integrates the switched Hertz system to steady state.
+
+Kernels are plain Numba functions on float arrays (no Python objects); everything
+user-facing lives in :mod:`harvester_sweep.scene`. One point's parameters are a row of
+``NP`` floats laid out by the ``P_*`` indices below, built by :func:`pack_parameters`.
+
+State per point: ``(x, v, V, v_imp)``: displacement [m], velocity [m/s], voltage [V] and
+the approach velocity [m/s] latched at the last first touch (used by the latched laws).
+
+The forcing phase is measured from the start of a forcing period, so the state at a
+period boundary is a stroboscopic sample y(nT) and can be continued at another frequency.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+# fastmath without nnan/ninf: the divergence check relies on isfinite.
+FASTMATH = {"contract", "arcp", "afn", "reassoc", "nsz"}
+_JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
+
+# Layout of a parameter row.
+(
+    P_A,  # base acceleration amplitude A [m/s^2]
+    P_WN2,  # k/m = wn^2 [1/s^2]
+    P_CM,  # c/m = 2 zeta wn [1/s]
+    P_THM,  # theta/m [N/(V kg)]
+    P_KHM,  # k_h/m [N/(m^1.5 kg)]
+    P_M,  # mass m [kg]
+    P_G,  # gap g [m]
+    P_CH,  # contact damping c_h in fixed mode [s/m]
+    P_LATCH,  # factor c_h v_imp of the latched law, 0 in fixed mode [-]
+    P_IRC,  # 1/(R C_p) [1/s]
+    P_THC,  # theta/C_p [V s/m]
+    P_R,  # load resistance R [Ohm]
+    P_T,  # forcing period T [s]
+    P_N,  # steps per period [-]
+    P_MAXP,  # budget of periods [-]
+    P_TOL,  # settle tolerance [-]
+    P_XLIM,  # |x| beyond this is divergence [m]
+) = range(17)
+NP = 17
+
+# Metrics per point, in this order (names are the public interface, see datasets.METRICS).
+METRIC_NAMES = (
+    "power",
+    "v_rms",
+    "v_peak",
+    "power_peak",
+    "x_max",
+    "x_min",
+    "contact_force_max",
+    "impacts_per_period",
+    "approach_velocity",
+    "orbit_period",
+    "status",
+    "periods_run",
+)
+NM = len(METRIC_NAMES)
+(M_POWER, M_VRMS, M_VPEAK, M_PPEAK, M_XMAX, M_XMIN, M_FCMAX, M_IMPACTS, M_VIMP, M_ORBIT,
+ M_STATUS, M_PERIODS) = range(NM)
+
+SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
+STATUS_NAMES = ("settled", "not settled", "diverged")
+MAX_ORBIT_PERIOD = 16  # longest orbit period p looked for, in forcing periods
+
+# Per-period accumulators kept for the last MAX_ORBIT_PERIOD periods.
+_A_Q, _A_XMAX, _A_XMIN, _A_VMAX, _A_VPK, _A_FCMAX, _A_NIMP, _A_SVIMP = range(8)
+_NA = 8
+
+
+def pack_parameters(p: dict) -> np.ndarray:
+    """Kernel parameter row from a validated parameter dict (SI units)."""
+    from .contact import damping_factor
+
+    wn = 2.0 * math.pi * p["natural_frequency"]
+    m = p["mass"]
+    latched = p["contact_damping"] is None and p["impact_velocity_mode"] == "latched"
+    if p["contact_damping"] is not None:
+        ch = p["contact_damping"]
+    else:
+        ch = damping_factor(p["contact_law"], p["restitution"]) / p["impact_velocity"]
+    row = np.zeros(NP)
+    row[P_A] = p["amplitude"]
+    row[P_WN2] = wn * wn
+    row[P_CM] = 2.0 * p["damping_ratio"] * wn
+    row[P_THM] = p["coupling"] / m
+    row[P_KHM] = p["hertz_stiffness"] / m
+    row[P_M] = m
+    row[P_G] = p["gap"]
+    row[P_CH] = ch
+    row[P_LATCH] = damping_factor(p["contact_law"], p["restitution"]) if latched else 0.0
+    row[P_IRC] = 1.0 / (p["resistance"] * p["capacitance"])
+    row[P_THC] = p["coupling"] / p["capacitance"]
+    row[P_R] = p["resistance"]
+    row[P_T] = 1.0 / p["frequency"]
+    row[P_N] = p["steps_per_period"]
+    row[P_MAXP] = p["max_periods"]
+    row[P_TOL] = p["settle_tolerance"]
+    static = p["amplitude"] / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
+    row[P_XLIM] = 1e3 * (abs(p["gap"]) + static + 1e-9)
+    return row
+
+
+def initial_state(p: dict) -> np.ndarray:
+    """State at rest, ``(0, 0, 0, impact_velocity)``."""
+    return np.array([0.0, 0.0, 0.0, p["impact_velocity"]])
+
+
+@njit(**_JIT)
+def _derivatives(x, v, V, f, wn2, cm, thm, khm, g, ch, irc, thc):
+    """Acceleration [m/s^2] and dV/dt [V/s]; the contact never pulls (factor clipped at 0)."""
+    d = max(x - g, 0.0)
+    a = f - cm * v - wn2 * x + thm * V - khm * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
+    return a, -irc * V - thc * v
+
+
+@njit(**_JIT)
+def _hermite(y0, d0, y1, d1, h):
+    """Coefficients B, C of the cubic Hermite y0 + h d0 s + B s^2 + C s^3 on s in [0, 1]."""
+    return 3.0 * (y1 - y0) - h * (2.0 * d0 + d1), 2.0 * (y0 - y1) + h * (d0 + d1)
+
+
+@njit(**_JIT)
+def _hermite_extremum(y0, d0, y1, d1, h):
+    """Value of the cubic Hermite interpolant where its derivative changes sign (d0 d1 <= 0)."""
+    B, C = _hermite(y0, d0, y1, d1, h)
+    s = d0 / (d0 - d1) if d0 != d1 else 0.5
+    for _ in range(4):
+        dp = h * d0 + 2.0 * B * s + 3.0 * C * s * s
+        ddp = 2.0 * B + 6.0 * C * s
+        if ddp != 0.0:
+            s = min(max(s - dp / ddp, 0.0), 1.0)
+    return y0 + h * d0 * s + B * s * s + C * s * s * s
+
+
+@njit(**_JIT)
+def _hermite_crossing_rate(y0, d0, y1, d1, h, level):
+    """Slope dy/dt of the cubic Hermite interpolant where it crosses ``level`` (y0 <= level < y1)."""
+    B, C = _hermite(y0, d0, y1, d1, h)
+    s = (level - y0) / (y1 - y0)
+    for _ in range(4):
+        dp = h * d0 + 2.0 * B * s + 3.0 * C * s * s
+        if dp > 0.0:
+            s = min(max(s - (y0 + h * d0 * s + B * s * s + C * s * s * s - level) / dp, 0.0), 1.0)
+    return (h * d0 + 2.0 * B * s + 3.0 * C * s * s) / h
+
+
+@njit(**_JIT)
+def run_point(p, y, metrics, strobe, series, settle):
+    """Integrate one point from state ``y`` (updated in place) with fixed-step RK4.
+
+    Parameters
+    ----------
+    p : float64[NP]
+        Parameter row (see :func:`pack_parameters`).
+    y : float64[4]
+        State ``(x, v, V, v_imp)``; on return, the state at the last period boundary.
+    metrics : float64[NM]
+        Output: the metrics of ``METRIC_NAMES``, over the orbit once settled (over the
+        last MAX_ORBIT_PERIOD periods when not settled; NaN when diverged).
+    strobe : float64[S, 3]
+        Output: stroboscopic samples (x, v, V) at the last S period boundaries (S may be 0).
+    series : float64[L, 4]
+        Output: (x, v, V, F_c) at every step boundary from the start (L may be 0).
+    settle : bool
+        Stop at steady state (True) or run exactly the budget of periods (False).
+    """
+    A, wn2, cm, thm, khm = p[P_A], p[P_WN2], p[P_CM], p[P_THM], p[P_KHM]
+    m, g, irc, thc = p[P_M], p[P_G], p[P_IRC], p[P_THC]
+    latch = p[P_LATCH]
+    n_steps = int(p[P_N])
+    max_periods = int(p[P_MAXP])
+    tol, xlim = p[P_TOL], p[P_XLIM]
+    h = p[P_T] / n_steps
+    hh, h6 = 0.5 * h, h / 6.0
+    kh = khm * m
+
+    # m A sin(w t) / m at the half steps of one period: sine[j] = A sin(pi j / n_steps).
+    sine = np.empty(2 * n_steps + 1)
+    for j in range(2 * n_steps + 1):
+        sine[j] = A * math.sin(math.pi * j / n_steps)
+
+    n_strobe = strobe.shape[0]
+    n_series = series.shape[0]
+    ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
+    ring = np.empty((ring_len, 3))
+    acc = np.zeros((MAX_ORBIT_PERIOD, _NA))
+    gaps = np.full((MAX_ORBIT_PERIOD, MAX_ORBIT_PERIOD + 1), np.inf)
+
+    x, v, V, vimp = y[0], y[1], y[2], y[3]
+    ch = latch / vimp if latch > 0.0 else p[P_CH]
+    ring[0, 0], ring[0, 1], ring[0, 2] = x, v, V
+    status, orbit, n = NOT_SETTLED, 0, 0
+    while n < max_periods:
+        q = 0.0
+        xmax, xmin, vmax, vpk = x, x, abs(v), abs(V)
+        d = max(x - g, 0.0)
+        fc = kh * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
+        fc_prev, fcmax, n_imp, sum_vimp = fc, fc, 0.0, 0.0
+        dV = -irc * V - thc * v
+        for k in range(n_steps):
+            j = n * n_steps + k
+            if j < n_series:
+                series[j, 0], series[j, 1], series[j, 2], series[j, 3] = x, v, V, fc
+            if latch > 0.0 and x <= g and v > 0.0:
+                ch = latch / v  # predicted approach velocity, refined at first touch below
+            s0, s1, s2 = sine[2 * k], sine[2 * k + 1], sine[2 * k + 2]
+            a1, e1 = _derivatives(x, v, V, s0, wn2, cm, thm, khm, g, ch, irc, thc)
+            x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
+            a2, e2 = _derivatives(x2, v2, V2, s1, wn2, cm, thm, khm, g, ch, irc, thc)
+            x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
+            a3, e3 = _derivatives(x3, v3, V3, s1, wn2, cm, thm, khm, g, ch, irc, thc)
+            x4, v4, V4 = x + h * v3, v + h * a3, V + h * e3
+            a4, e4 = _derivatives(x4, v4, V4, s2, wn2, cm, thm, khm, g, ch, irc, thc)
+            xn = x + h6 * (v + 2.0 * (v2 + v3) + v4)
+            vn = v + h6 * (a1 + 2.0 * (a2 + a3) + a4)
+            Vn = V + h6 * (e1 + 2.0 * (e2 + e3) + e4)
+            q += h6 * (V * V + 2.0 * (V2 * V2 + V3 * V3) + V4 * V4)
+            dVn = -irc * Vn - thc * vn
+
+            # Events inside the step, located on the cubic Hermite interpolant.
+            if x <= g < xn:  # first touch
+                v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
+                n_imp += 1.0
+                sum_vimp += v_on
+                if latch > 0.0 and v_on > 0.0:
+                    vimp = v_on
+                    ch = latch / v_on
+            if v > 0.0 >= vn or v < 0.0 <= vn:
+                xe = _hermite_extremum(x, v, xn, vn, h)
+                xmax, xmin = max(xmax, xe), min(xmin, xe)
+            if (dV > 0.0) != (dVn > 0.0):
+                vpk = max(vpk, abs(_hermite_extremum(V, dV, Vn, dVn, h)))
+            d = max(xn - g, 0.0)
+            fcn = kh * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
+            if fc_prev > 0.0 and fc >= fc_prev and fc > fcn:  # parabola through the peak
+                a = 0.5 * (fc_prev + fcn) - fc
+                b = 0.5 * (fcn - fc_prev)
+                fcmax = max(fcmax, fc - b * b / (4.0 * a))
+
+            x, v, V, dV, fc_prev, fc = xn, vn, Vn, dVn, fc, fcn
+            xmax, xmin = max(xmax, x), min(xmin, x)
+            vmax, vpk, fcmax = max(vmax, abs(v)), max(vpk, abs(V)), max(fcmax, fc)
+        n += 1
+        if not (math.isfinite(x + v + V + q) and abs(x) <= xlim):
+            status = DIVERGED
+            break
+        slot = (n - 1) % MAX_ORBIT_PERIOD
+        acc[slot, _A_Q], acc[slot, _A_XMAX], acc[slot, _A_XMIN] = q, xmax, xmin
+        acc[slot, _A_VMAX], acc[slot, _A_VPK], acc[slot, _A_FCMAX] = vmax, vpk, fcmax
+        acc[slot, _A_NIMP], acc[slot, _A_SVIMP] = n_imp, sum_vimp
+        r = n % ring_len
+        ring[r, 0], ring[r, 1], ring[r, 2] = x, v, V
+        if settle:
+            orbit = _orbit_period(ring, acc, gaps, n, ring_len, tol)
+            if orbit > 0 and n >= n_strobe:
+                status = SETTLED
+                break
+
+    j = n * n_steps
+    if j < n_series:
+        series[j, 0], series[j, 1], series[j, 2], series[j, 3] = x, v, V, fc
+    y[0], y[1], y[2], y[3] = x, v, V, vimp
+    for i in range(n_strobe):
+        age = n_strobe - 1 - i
+        for c in range(3):
+            strobe[i, c] = ring[(n - age) % ring_len, c] if age <= n and status != DIVERGED else np.nan
+    _reduce(acc, n, orbit if status == SETTLED else min(n, MAX_ORBIT_PERIOD), p, metrics)
+    metrics[M_ORBIT] = orbit
+    metrics[M_STATUS] = status
+    metrics[M_PERIODS] = n
+    if status == DIVERGED:
+        for i in range(M_ORBIT):
+            metrics[i] = np.nan
+
+
+@njit(**_JIT)
+def _orbit_period(ring, acc, gaps, n, ring_len, tol):
+    """Orbit period p once the transient left in y(nT) is below ``tol``, else 0.
+
+    The gap e_p(n) = |y(nT) - y((n-p)T)| (largest over x, v, V, each relative to its
+    amplitude over the last p periods) shrinks geometrically, by rho = e_p(n) / e_p(n-p)
+    per p periods, so the transient still left is about e_p(n) / (1 - rho). Testing that
+    estimate, not e_p(n) alone, keeps slow transients (rho near 1, light damping) and
+    transients that alternate in sign (a multiplier near -1 mimics p = 2) from passing
+    for a steady state. Once settled at p, the smallest divisor of p that also repeats
+    is the orbit period.
+    """
+    row = n % MAX_ORBIT_PERIOD
+    found = 0
+    for period in range(1, min(n, MAX_ORBIT_PERIOD) + 1):
+        e = _gap(ring, acc, n, period, ring_len)
+        before = gaps[(n - period) % MAX_ORBIT_PERIOD, period]
+        gaps[row, period] = e
+        if found == 0 and (e <= 1e-3 * tol or (e < before and e <= tol * (1.0 - e / before))):
+            found = period
+    if found > 1:
+        for d in range(1, found):
+            if found % d == 0 and gaps[row, d] <= 4.0 * tol:
+                return d
+    return found
+
+
+@njit(**_JIT)
+def _gap(ring, acc, n, period, ring_len):
+    """max over (x, v, V) of |y(nT) - y((n-period)T)| / amplitude over the last periods."""
+    xs, vs, es = 0.0, 0.0, 0.0
+    for i in range(period):
+        slot = (n - 1 - i) % MAX_ORBIT_PERIOD
+        xs = max(xs, abs(acc[slot, _A_XMAX]), abs(acc[slot, _A_XMIN]))
+        vs, es = max(vs, acc[slot, _A_VMAX]), max(es, acc[slot, _A_VPK])
+    a, b = ring[n % ring_len], ring[(n - period) % ring_len]
+    e = 0.0
+    if xs > 0.0:
+        e = max(e, abs(a[0] - b[0]) / xs)
+    if vs > 0.0:
+        e = max(e, abs(a[1] - b[1]) / vs)
+    if es > 0.0:
+        e = max(e, abs(a[2] - b[2]) / es)
+    return e
+
+
+@njit(**_JIT)
+def _reduce(acc, n, periods, p, metrics):
+    """Metrics over the last ``periods`` forcing periods from the per-period accumulators."""
+    q, n_imp, sum_vimp = 0.0, 0.0, 0.0
+    xmax, xmin, vpk, fcmax = -np.inf, np.inf, 0.0, 0.0
+    for i in range(periods):
+        slot = (n - 1 - i) % MAX_ORBIT_PERIOD
+        q += acc[slot, _A_Q]
+        xmax, xmin = max(xmax, acc[slot, _A_XMAX]), min(xmin, acc[slot, _A_XMIN])
+        vpk, fcmax = max(vpk, acc[slot, _A_VPK]), max(fcmax, acc[slot, _A_FCMAX])
+        n_imp += acc[slot, _A_NIMP]
+        sum_vimp += acc[slot, _A_SVIMP]
+    mean_v2 = q / (max(periods, 1) * p[P_T])
+    metrics[M_POWER] = mean_v2 / p[P_R]
+    metrics[M_VRMS] = math.sqrt(mean_v2)
+    metrics[M_VPEAK] = vpk
+    metrics[M_PPEAK] = vpk * vpk / p[P_R]
+    metrics[M_XMAX], metrics[M_XMIN] = xmax, xmin
+    metrics[M_FCMAX] = fcmax
+    metrics[M_IMPACTS] = n_imp / max(periods, 1)
+    metrics[M_VIMP] = sum_vimp / n_imp if n_imp > 0 else np.nan
+
+
+@njit(parallel=True, **_JIT)
+def run_points(params, states, metrics, strobes):
+    """Run every point to steady state in parallel (one point per thread at a time).
+
+    ``params[i]`` is a parameter row, ``states[i]`` the state (updated in place),
+    ``metrics[i]`` and ``strobes[i]`` the outputs of :func:`run_point`. Points are
+    independent, so a point's result does not depend on the thread count.
+    """
+    no_series = np.empty((0, 4))
+    for i in prange(params.shape[0]):
+        run_point(params[i], states[i], metrics[i], strobes[i], no_series, True)
+
+
+def warm_up() -> None:
+    """Compile :func:`run_points` (or load it from numba's on-disk cache) without running."""
+    run_points(np.zeros((0, NP)), np.zeros((0, 4)), np.zeros((0, NM)), np.zeros((0, 0, 3)))
+
+
+def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarray:
+    """(x, v, V, F_c) at every step over ``periods`` forcing periods from ``state``.
+
+    Returns a float64 array of shape ``(periods * steps_per_period + 1, 4)``; ``state``
+    is not modified.
+    """
+    row = row.copy()
+    row[P_MAXP] = periods
+    n_steps = int(row[P_N])
+    series = np.empty((periods * n_steps + 1, 4))
+    metrics = np.empty(NM)
+    run_point(row, state.copy(), metrics, np.empty((0, 3)), series, False)
+    return series

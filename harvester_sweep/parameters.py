@@ -1,0 +1,278 @@
+"""Model parameters: names, SI units, allowed ranges, presets and validation.
+
+Every parameter the engine takes is listed once in :data:`PARAMETERS`; the
+command line, the Python API, the datasets and the docs all use these names.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .contact import CONTACT_LAWS, IMPACT_VELOCITY_MODES
+from .materials import MATERIALS, hertz_stiffness_from_bodies
+
+
+class ParameterError(ValueError):
+    """A parameter is unknown, of the wrong type or out of its allowed range."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One model or run parameter.
+
+    ``low``/``high`` bound the value (``None`` for unbounded); ``low_open`` and
+    ``high_open`` make a bound exclusive. ``kind`` is ``"float"``, ``"int"`` or
+    ``"choice"`` (then ``choices`` lists the allowed strings).
+    """
+
+    name: str
+    unit: str
+    description: str
+    kind: str = "float"
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+    choices: tuple[str, ...] = ()
+    optional: bool = False
+
+    def range_text(self) -> str:
+        if self.kind == "choice":
+            return "one of " + ", ".join(self.choices)
+        if self.low is None and self.high is None:
+            return "any finite number"
+        lo = "-inf" if self.low is None else f"{self.low:g}"
+        hi = "inf" if self.high is None else f"{self.high:g}"
+        left = "(" if self.low is None or self.low_open else "["
+        right = ")" if self.high is None or self.high_open else "]"
+        what = "an integer" if self.kind == "int" else "a finite number"
+        return f"{what} in {left}{lo}, {hi}{right}"
+
+    def check(self, value):
+        """Return ``value`` converted to this parameter's type, or raise ParameterError."""
+        if self.optional and value is None:
+            return None
+        unit = f" [{'-' if self.unit == '1' else self.unit}]"
+        if self.kind == "choice":
+            if value not in self.choices:
+                raise ParameterError(f"{self.name}{unit} = {value!r}: must be {self.range_text()}")
+            return value
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                f"{self.name}{unit} = {value!r} is not a number: must be {self.range_text()}"
+            ) from None
+        bad = not math.isfinite(number)
+        if self.low is not None:
+            bad |= number < self.low or (self.low_open and number == self.low)
+        if self.high is not None:
+            bad |= number > self.high or (self.high_open and number == self.high)
+        if self.kind == "int":
+            bad |= not number.is_integer()
+        if bad:
+            raise ParameterError(f"{self.name}{unit} = {value!r}: must be {self.range_text()}")
+        return int(number) if self.kind == "int" else number
+
+
+_P = Parameter
+PARAMETERS: dict[str, Parameter] = {
+    p.name: p
+    for p in [
+        _P("mass", "kg", "effective tip mass m", low=0, low_open=True),
+        _P("natural_frequency", "Hz", "short-circuit natural frequency f_n", low=0, low_open=True),
+        _P("damping_ratio", "1", "mechanical damping ratio zeta", low=0, high=10),
+        _P("coupling", "N/V", "electromechanical coupling theta (k d33 in the paper)", low=0),
+        _P("capacitance", "F", "piezo capacitance C_p", low=0, low_open=True),
+        _P("resistance", "Ohm", "load resistance R", low=0, low_open=True),
+        _P("amplitude", "m/s^2", "base acceleration amplitude A (the paper's Y)", low=0),
+        _P("frequency", "Hz", "excitation frequency f", low=0, low_open=True),
+        _P("gap", "m", "distance from rest to the stop g (<= 0: preloaded stop)"),
+        _P("hertz_stiffness", "N/m^1.5", "Hertz contact stiffness k_h (0: no stop)", low=0),
+        _P("restitution", "1", "coefficient of restitution e", low=0, high=1, low_open=True),
+        _P(
+            "impact_velocity",
+            "m/s",
+            "approach velocity v_imp in the contact damping law (fixed mode; "
+            "latched mode: used until the first impact)",
+            low=0,
+            low_open=True,
+        ),
+        _P(
+            "contact_damping",
+            "s/m",
+            "contact damping c_h; when given it overrides the value from the contact law",
+            low=0,
+            optional=True,
+        ),
+        _P("contact_law", "1", "contact damping law", kind="choice", choices=tuple(CONTACT_LAWS)),
+        _P(
+            "impact_velocity_mode",
+            "1",
+            "'fixed': v_imp = impact_velocity (the paper); "
+            "'latched': each impact's own approach velocity, latched at first touch",
+            kind="choice",
+            choices=IMPACT_VELOCITY_MODES,
+        ),
+        _P(
+            "stop_mass",
+            "kg",
+            "mass of the stop; when given, hertz_stiffness is computed from the tip and stop "
+            "materials and masses (Goldsmith, equivalent spheres)",
+            low=0,
+            low_open=True,
+            optional=True,
+        ),
+        _P("tip_material", "1", "tip mass material", kind="choice", choices=tuple(MATERIALS)),
+        _P("stop_material", "1", "stop material", kind="choice", choices=tuple(MATERIALS)),
+        _P("steps_per_period", "1", "RK4 steps per forcing period", kind="int", low=16, high=1e8),
+        _P("max_periods", "1", "budget of forcing periods to reach steady state", kind="int",
+           low=1, high=1e8),
+        _P(
+            "settle_tolerance",
+            "1",
+            "steady state when |y(nT) - y((n-p)T)| <= settle_tolerance * amplitude, per component",
+            low=0,
+            high=1e-3,
+            low_open=True,
+        ),
+    ]
+}
+
+#: Parameters every preset starts from (the paper's Table 1 with the corrections of MODEL.md).
+_TABLE_1 = dict(
+    mass=2.5e-3,
+    natural_frequency=150.0,
+    damping_ratio=0.01,
+    capacitance=100e-9,
+    resistance=10e3,
+    amplitude=1.0,
+    frequency=140.0,
+    gap=1e-6,
+    hertz_stiffness=9.03e8,
+    restitution=0.85,
+    impact_velocity=1.76e-3,
+    contact_damping=None,
+    contact_law="lankarani_nikravesh",
+    impact_velocity_mode="fixed",
+    stop_mass=None,
+    tip_material="copper",
+    stop_material="steel",
+    steps_per_period=1024,
+    max_periods=10000,
+    settle_tolerance=1e-10,
+)
+_D33 = 190e-12  # m/V, Table 1
+_K_TABLE_1 = _TABLE_1["mass"] * (2 * math.pi * _TABLE_1["natural_frequency"]) ** 2
+
+PRESETS: dict[str, dict] = {
+    "paper": dict(_TABLE_1, coupling=_K_TABLE_1 * _D33),
+    "strong_coupling": dict(_TABLE_1, coupling=3e-3),
+}
+
+#: What each preset assumes beyond its source, printed with every result.
+PRESET_NOTES: dict[str, list[str]] = {
+    "paper": [
+        "Mereles et al., Table 1; coupling = k d33 = 4.2e-7 N/V (Eq. 8)",
+        "capacitance 100 nF is assumed: Table 1 gives none",
+        "contact damping from Lankarani-Nikravesh c_h = 3(1-e^2)/(4 v_imp) = 118 s/m "
+        "(the printed 1.07e11 counts k_h twice, see MODEL.md)",
+    ],
+    "strong_coupling": [
+        "the paper scene with coupling 3e-3 N/V, a device-like coupling giving ~0.1 V",
+        "capacitance 100 nF is assumed",
+    ],
+}
+
+
+def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
+    """Return the full, validated parameter set: a preset updated with ``overrides``.
+
+    Parameters
+    ----------
+    preset : str or None
+        Name of a preset in :data:`PRESETS`; ``None`` starts from the paper's values.
+    **overrides
+        Parameter values by name, in the SI units of :data:`PARAMETERS`.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown preset or parameter name, or a value out of its range.
+    """
+    if preset is not None and preset not in PRESETS:
+        raise ParameterError(f"preset {preset!r} is unknown: must be one of {', '.join(PRESETS)}")
+    values = dict(PRESETS[preset or "paper"])
+    for name in overrides:
+        if name not in PARAMETERS:
+            raise ParameterError(
+                f"unknown parameter {name!r}: known parameters are {', '.join(PARAMETERS)}"
+            )
+    if overrides.get("stop_mass") is not None:
+        if overrides.get("hertz_stiffness") is not None:
+            raise ParameterError(
+                "give hertz_stiffness [N/m^1.5] or stop_mass [kg], not both: "
+                "stop_mass computes hertz_stiffness from the materials"
+            )
+    values.update(overrides)
+    checked = {name: PARAMETERS[name].check(values[name]) for name in PARAMETERS}
+    if checked["stop_mass"] is not None:
+        checked["hertz_stiffness"] = hertz_stiffness_from_bodies(
+            checked["mass"], checked["tip_material"], checked["stop_mass"], checked["stop_material"]
+        )
+    _check_step(checked)
+    return checked
+
+
+#: Explicit RK4 is stable for h * rate <= 2.78 on a decaying mode; keep a margin.
+RK4_RATE_BOUND = 2.5
+
+
+def _check_step(p: dict) -> None:
+    """The step must resolve the forcing and natural oscillations (16 steps per cycle) and
+    keep the load circuit's decay rate 1/(R C_p) inside RK4's stability bound."""
+    fastest = max(p["frequency"], p["natural_frequency"])
+    step = 1.0 / (p["frequency"] * p["steps_per_period"])
+    needed = math.ceil(16 * fastest / p["frequency"])
+    if p["steps_per_period"] < needed:
+        raise ParameterError(
+            f"steps_per_period [-] = {p['steps_per_period']}: the step {step:.3g} s does not "
+            f"resolve the {fastest:g} Hz oscillation (16 steps per cycle): must be an integer "
+            f">= {needed}"
+        )
+    tau = p["resistance"] * p["capacitance"]
+    needed = math.ceil(1.0 / (p["frequency"] * RK4_RATE_BOUND * tau))
+    if p["steps_per_period"] < needed:
+        raise ParameterError(
+            f"steps_per_period [-] = {p['steps_per_period']}: the step {step:.3g} s exceeds "
+            f"RK4's stability bound {RK4_RATE_BOUND} R C_p = {RK4_RATE_BOUND * tau:.3g} s of the "
+            f"load circuit (resistance {p['resistance']:g} Ohm, capacitance "
+            f"{p['capacitance']:g} F): must be an integer >= {needed}"
+        )
+
+
+def parse_assignment(text: str) -> tuple[str, object]:
+    """Parse ``NAME=VALUE`` from the command line into a typed pair."""
+    name, sep, raw = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise ParameterError(f"--set {text!r}: expected NAME=VALUE, e.g. --set gap=2e-6")
+    if name not in PARAMETERS:
+        raise ParameterError(
+            f"unknown parameter {name!r}: known parameters are {', '.join(PARAMETERS)}"
+        )
+    raw = raw.strip()
+    spec = PARAMETERS[name]
+    if spec.kind == "choice":
+        return name, raw
+    if spec.optional and raw.lower() in ("", "none"):
+        return name, None
+    try:
+        number = float(raw)
+    except ValueError:
+        unit = f" [{'-' if spec.unit == '1' else spec.unit}]"
+        raise ParameterError(
+            f"{name}{unit} = {raw!r} is not a number: must be {spec.range_text()}"
+        ) from None
+    return name, int(number) if spec.kind == "int" and number.is_integer() else number
