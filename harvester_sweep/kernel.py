@@ -70,6 +70,7 @@ MAX_ORBIT_PERIOD = 16  # longest orbit period p looked for, in forcing periods
 # Per-period accumulators kept for the last MAX_ORBIT_PERIOD periods.
 _A_Q, _A_XMAX, _A_XMIN, _A_VMAX, _A_VPK, _A_FCMAX, _A_NIMP, _A_SVIMP = range(8)
 _NA = 8
+_GAP_HISTORY = 4 * MAX_ORBIT_PERIOD  # periods of e_p(n) kept to estimate the decay rate
 
 
 def pack_parameters(p: dict) -> np.ndarray:
@@ -189,7 +190,7 @@ def run_point(p, y, metrics, strobe, series, settle):
     ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
     ring = np.empty((ring_len, 3))
     acc = np.zeros((MAX_ORBIT_PERIOD, _NA))
-    gaps = np.full((MAX_ORBIT_PERIOD, MAX_ORBIT_PERIOD + 1), np.inf)
+    gaps = np.full((_GAP_HISTORY, MAX_ORBIT_PERIOD + 1), np.inf)
 
     x, v, V, vimp = y[0], y[1], y[2], y[3]
     ch = latch / vimp if latch > 0.0 else p[P_CH]
@@ -287,20 +288,26 @@ def _orbit_period(ring, acc, gaps, n, ring_len, tol):
     per p periods, so the transient still left is about e_p(n) / (1 - rho). Testing that
     estimate, not e_p(n) alone, keeps slow transients (rho near 1, light damping) and
     transients that alternate in sign (a multiplier near -1 mimics p = 2) from passing
-    for a steady state. Once settled at p, the smallest divisor of p that also repeats
-    is the orbit period.
+    for a steady state; rho is the largest of the last three ratios because beating
+    modes make single ratios jump. Once settled at p, the smallest divisor of p that
+    also repeats is the orbit period.
     """
-    row = n % MAX_ORBIT_PERIOD
+    row = n % _GAP_HISTORY
     found = 0
     for period in range(1, min(n, MAX_ORBIT_PERIOD) + 1):
         e = _gap(ring, acc, n, period, ring_len)
-        before = gaps[(n - period) % MAX_ORBIT_PERIOD, period]
         gaps[row, period] = e
-        if found == 0 and (e <= 1e-3 * tol or (e < before and e <= tol * (1.0 - e / before))):
-            found = period
+        if found == 0:
+            rho = 0.0
+            for k in range(3):
+                later = gaps[(n - k * period) % _GAP_HISTORY, period]
+                earlier = gaps[(n - (k + 1) * period) % _GAP_HISTORY, period]
+                rho = max(rho, later / earlier if 0.0 < earlier < np.inf else np.inf)
+            if e <= 1e-3 * tol or (rho < 1.0 and e <= tol * (1.0 - rho)):
+                found = period
     if found > 1:
         for d in range(1, found):
-            if found % d == 0 and gaps[row, d] <= 4.0 * tol:
+            if found % d == 0 and gaps[row, d] <= 8.0 * tol:
                 return d
     return found
 

@@ -1,0 +1,45 @@
+"""With the stop out of reach the harvester is linear: compare with the phasor solution."""
+
+import numpy as np
+import pytest
+from reference import phasor
+
+from harvester_sweep import run_scene
+
+FREQUENCIES = [50.0, 100.0, 140.0, 150.0, 200.0, 300.0]  # Hz
+RESISTANCES = [10.0, 1e3, 1e5, 1e7]  # Ohm
+
+
+def _steps(frequency, resistance, capacitance=100e-9):
+    """Enough steps for the 1e-6 target and RK4 stability on the load circuit."""
+    return max(1024, int(np.ceil(1.0 / (frequency * resistance * capacitance))))
+
+
+@pytest.mark.parametrize("frequency", FREQUENCIES)
+@pytest.mark.parametrize("resistance", RESISTANCES)
+def test_linear_amplitudes_match_phasor(frequency, resistance):
+    # Strong coupling so that the load matters; the stop is 1 m away.
+    result = run_scene("paper", gap=1.0, coupling=3e-3, frequency=frequency,
+                       resistance=resistance, steps_per_period=_steps(frequency, resistance),
+                       settle_tolerance=1e-12, max_periods=20000)
+    X, V = phasor(**result.parameters)
+    m = result.metrics
+    assert m["converged"] and m["orbit_period"] == 1 and m["impacts_per_period"] == 0
+    assert m["x_max"] == pytest.approx(abs(X), rel=1e-6)
+    assert -m["x_min"] == pytest.approx(abs(X), rel=1e-6)
+    assert m["v_peak"] == pytest.approx(abs(V), rel=1e-6)
+    assert m["v_rms"] == pytest.approx(abs(V) / np.sqrt(2), rel=1e-6)
+    assert m["power"] == pytest.approx(abs(V) ** 2 / (2 * resistance), rel=2e-6)
+
+
+def test_rk4_error_falls_at_fourth_order():
+    steps = np.array([48, 96, 192, 384])
+    errors = []
+    for n in steps:
+        result = run_scene("paper", gap=1.0, coupling=3e-3, steps_per_period=int(n),
+                           settle_tolerance=1e-13)
+        _, V = phasor(**result.parameters)
+        errors.append(abs(result.metrics["v_rms"] / (abs(V) / np.sqrt(2)) - 1))
+    orders = -np.diff(np.log(errors)) / np.diff(np.log(steps))
+    assert errors[-1] < 1e-7
+    assert np.all((orders > 3.7) & (orders < 4.3)), orders
