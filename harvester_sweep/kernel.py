@@ -140,7 +140,8 @@ def _hermite_extremum(y0, d0, y1, d1, h):
 
 @njit(**_JIT)
 def _hermite_crossing_rate(y0, d0, y1, d1, h, level):
-    """Slope dy/dt of the cubic Hermite interpolant where it crosses ``level`` (y0 <= level < y1)."""
+    """Slope dy/dt of the cubic Hermite interpolant where it crosses ``level`` (y0 <= level < y1).
+    """
     B, C = _hermite(y0, d0, y1, d1, h)
     s = (level - y0) / (y1 - y0)
     for _ in range(4):
@@ -268,8 +269,9 @@ def run_point(p, y, metrics, strobe, series, settle):
     y[0], y[1], y[2], y[3] = x, v, V, vimp
     for i in range(n_strobe):
         age = n_strobe - 1 - i
+        valid = age <= n and status != DIVERGED
         for c in range(3):
-            strobe[i, c] = ring[(n - age) % ring_len, c] if age <= n and status != DIVERGED else np.nan
+            strobe[i, c] = ring[(n - age) % ring_len, c] if valid else np.nan
     _reduce(acc, n, orbit if status == SETTLED else min(n, MAX_ORBIT_PERIOD), p, metrics)
     metrics[M_ORBIT] = orbit
     metrics[M_STATUS] = status

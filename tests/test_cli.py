@@ -1,0 +1,83 @@
+"""The harvester-sweep command line: table, JSON, netCDF, plot and user errors."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from harvester_sweep import PARAMETERS
+from harvester_sweep.cli import main
+from harvester_sweep.datasets import METRICS
+
+JSON_KEYS = {"power", "v_rms", "v_peak", "power_peak", "x_max", "x_min", "contact_force_max",
+             "impacts_per_period", "approach_velocity", "orbit_period", "converged",
+             "periods_run", "steps_per_period", "run_time"}
+
+
+def test_scene_json_has_every_metric(capsys):
+    assert main(["scene", "--preset", "paper", "--json", "--set", "gap=1.5e-6"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert JSON_KEYS <= set(metrics)
+    assert metrics["converged"] is True and metrics["status"] == "settled"
+    assert metrics["steps_per_period"] == 1024
+
+
+def test_scene_table_is_readable(capsys):
+    assert main(["scene"]) == 0
+    out = capsys.readouterr().out
+    assert "100 nF is assumed" in out
+    assert "approach_velocity" in out and "m/s" in out
+
+
+def test_output_netcdf_and_plot(tmp_path, capsys):
+    nc, png = tmp_path / "scene.nc", tmp_path / "scene.png"
+    assert main(["scene", "--output", str(nc), "--plot", str(png), "--set", "resistance=2e4"]) == 0
+    assert png.stat().st_size > 10_000
+    with xr.open_dataset(nc) as ds:
+        for name, var in ds.variables.items():
+            assert var.attrs.get("units") and var.attrs.get("long_name"), name
+        for name in PARAMETERS:
+            assert name in ds.attrs, name
+        assert ds.attrs["resistance"] == 2e4 and ds.attrs["resistance_units"] == "Ohm"
+        assert set(METRICS) <= set(ds.data_vars)
+        assert {"displacement", "velocity", "voltage", "instantaneous_power",
+                "contact_force"} <= set(ds.data_vars)
+        # The recorded series is the steady orbit: its peak is the metric.
+        assert float(ds.voltage.max()) <= float(ds.v_peak) * (1 + 1e-9)
+        assert np.all(ds.contact_force.values >= 0)
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["scene", "--set", "mass=-1"], "mass [kg]"),
+    (["scene", "--set", "restitution=0"], "restitution [-]"),
+    (["scene", "--set", "gap=inf"], "gap [m]"),
+    (["scene", "--set", "frequency=abc"], "frequency [Hz]"),
+    (["scene", "--set", "colour=red"], "unknown parameter 'colour'"),
+    (["scene", "--set", "steps_per_period=17"], "steps_per_period [-]"),
+])
+def test_user_errors_exit_2_with_one_line(argv, words, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_divergence_is_reported_not_printed_as_numbers(capsys):
+    # 20 steps per period pass the forcing check but cannot resolve the contact.
+    assert main(["scene", "--json", "--set", "steps_per_period=20"]) == 3
+    captured = capsys.readouterr()
+    metrics = json.loads(captured.out)
+    assert metrics["status"] == "diverged" and metrics["converged"] is False
+    assert metrics["power"] is None and metrics["v_peak"] is None
+    assert "diverged" in captured.err and "steps_per_period" in captured.err
+
+
+def test_console_script_runs_without_traceback():
+    ok = subprocess.run([sys.executable, "-m", "harvester_sweep.cli", "scene", "--json"],
+                        capture_output=True, text=True)
+    assert ok.returncode == 0 and json.loads(ok.stdout)["converged"]
+    bad = subprocess.run([sys.executable, "-m", "harvester_sweep.cli", "scene", "--set",
+                          "mass=0"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and "mass [kg]" in bad.stderr

@@ -1,0 +1,73 @@
+"""Bad input fails before any integration, naming the parameter, its unit and its range."""
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from harvester_sweep import PARAMETERS, ParameterError, resolve_parameters, run_scene
+from harvester_sweep.materials import MATERIALS, hertz_stiffness_from_bodies
+
+FLOATS = [name for name, spec in PARAMETERS.items() if spec.kind == "float"]
+
+
+@pytest.mark.parametrize(
+    "name, value, unit",
+    [("mass", 0.0, "[kg]"), ("mass", -1e-3, "[kg]"), ("restitution", 0.0, "[-]"),
+     ("restitution", 1.01, "[-]"), ("frequency", -5.0, "[Hz]"), ("capacitance", 0.0, "[F]"),
+     ("hertz_stiffness", -1.0, "[N/m^1.5]"), ("steps_per_period", 8, "[-]"),
+     ("steps_per_period", 100.5, "[-]"), ("contact_law", "plastic", "[-]")],
+)
+def test_out_of_range_names_parameter_unit_and_range(name, value, unit):
+    with pytest.raises(ParameterError) as info:
+        run_scene("paper", **{name: value})
+    message = str(info.value)
+    assert message.startswith(f"{name} {unit}") and "must be" in message
+    assert "\n" not in message
+
+
+@settings(max_examples=40, deadline=None)
+@given(name=st.sampled_from(FLOATS), value=st.sampled_from([math.nan, math.inf, -math.inf]))
+def test_non_finite_values_are_refused(name, value):
+    with pytest.raises(ParameterError, match=name):
+        resolve_parameters("paper", **{name: value})
+
+
+def test_unknown_names_are_refused():
+    with pytest.raises(ParameterError, match="unknown parameter 'gapp'"):
+        run_scene("paper", gapp=1e-6)
+    with pytest.raises(ParameterError, match="preset 'papr'"):
+        run_scene("papr")
+
+
+def test_step_too_coarse_for_forcing_or_circuit():
+    with pytest.raises(ParameterError, match="steps_per_period .* >= 18"):
+        resolve_parameters("paper", frequency=140.0, natural_frequency=150.0, steps_per_period=16)
+    with pytest.raises(ParameterError, match="stability bound .* load circuit"):
+        resolve_parameters("paper", resistance=10.0)
+
+
+def test_paper_preset_states_its_assumptions():
+    p = resolve_parameters("paper")
+    k = p["mass"] * (2 * math.pi * p["natural_frequency"]) ** 2
+    assert p["coupling"] == pytest.approx(k * 190e-12)
+    assert p["capacitance"] == 100e-9
+    notes = " ".join(run_scene("paper", max_periods=1).notes)
+    assert "100 nF is assumed" in notes
+
+
+def test_hertz_stiffness_matches_johnson_form():
+    """Goldsmith's form (MODEL.md) equals Johnson's k = 4/3 E* sqrt(R*)."""
+    cu, steel = MATERIALS["copper"], MATERIALS["steel"]
+    r1 = (3 * 2.5e-3 / (4 * math.pi * cu.density)) ** (1 / 3)
+    r2 = (3 * 0.05 / (4 * math.pi * steel.density)) ** (1 / 3)
+    e_star = 1 / ((1 - cu.poissons_ratio**2) / cu.youngs_modulus
+                  + (1 - steel.poissons_ratio**2) / steel.youngs_modulus)
+    expected = 4 / 3 * e_star * math.sqrt(r1 * r2 / (r1 + r2))
+    assert hertz_stiffness_from_bodies(2.5e-3, "copper", 0.05, "steel") == pytest.approx(
+        expected, rel=1e-12)
+    p = resolve_parameters("paper", stop_mass=0.05)
+    assert p["hertz_stiffness"] == pytest.approx(expected, rel=1e-12)
+    with pytest.raises(ParameterError, match="not both"):
+        resolve_parameters("paper", stop_mass=0.05, hertz_stiffness=1e9)

@@ -1,0 +1,37 @@
+"""The same input gives the same bits, whatever the thread count or the other points."""
+
+import numba
+import numpy as np
+
+from harvester_sweep import kernel, resolve_parameters, run_scene
+
+
+def _strip(metrics):
+    return {k: v for k, v in metrics.items() if k != "run_time"}
+
+
+def test_same_scene_same_bits():
+    assert _strip(run_scene("paper").metrics) == _strip(run_scene("paper").metrics)
+
+
+def test_point_independent_of_threads_and_neighbours():
+    alone = run_scene("paper", gap=1.2e-6)
+    gaps = [0.5e-6, 1.2e-6, 3e-6, 1.0]
+    rows = np.array([kernel.pack_parameters(resolve_parameters("paper", gap=g)) for g in gaps])
+    results = []
+    for threads in (1, 2):
+        numba.set_num_threads(threads)
+        states = np.array([kernel.initial_state(resolve_parameters("paper"))] * len(gaps))
+        metrics = np.empty((len(gaps), kernel.NM))
+        kernel.run_points(rows, states, metrics, np.empty((len(gaps), 0, 3)))
+        results.append((metrics, states))
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])
+    for i, name in enumerate(kernel.METRIC_NAMES):
+        value = alone.metrics[name]
+        if name == "status":
+            assert kernel.STATUS_NAMES[int(results[0][0][1, i])] == value
+        elif value is not None:
+            assert results[0][0][1, i] == value, name
+    np.testing.assert_array_equal(results[0][1][1], alone.state)
