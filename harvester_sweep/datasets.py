@@ -85,7 +85,9 @@ def run_attributes(parameters: dict, notes) -> dict:
         "notes": "; ".join(notes),
     }
     for name, value in parameters.items():
-        attrs[name] = "none" if value is None else value
+        if value is None or isinstance(value, bool):  # netCDF attributes hold neither
+            value = str(value).lower()
+        attrs[name] = value
         attrs[f"{name}_units"] = PARAMETERS[name].unit
     return attrs
 

@@ -41,8 +41,9 @@ _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
     P_MAXP,  # budget of periods [-]
     P_TOL,  # settle tolerance [-]
     P_XLIM,  # |x| beyond this is divergence [m]
-) = range(17)
-NP = 17
+    P_LOCATE,  # 1: locate contact switches inside the step, 0: plain fixed steps [-]
+) = range(18)
+NP = 18
 
 # Metrics per point, in this order (names are the public interface, see datasets.METRICS).
 METRIC_NAMES = (
@@ -103,6 +104,7 @@ def pack_parameters(p: dict) -> np.ndarray:
     row[P_TOL] = p["settle_tolerance"]
     static = p["amplitude"] / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
     row[P_XLIM] = 1e3 * (abs(p["gap"]) + static + 1e-9)
+    row[P_LOCATE] = 1.0 if p["locate_switches"] else 0.0
     return row
 
 
@@ -139,16 +141,120 @@ def _hermite_extremum(y0, d0, y1, d1, h):
 
 
 @njit(**_JIT)
-def _hermite_crossing_rate(y0, d0, y1, d1, h, level):
-    """Slope dy/dt of the cubic Hermite interpolant where it crosses ``level`` (y0 <= level < y1).
-    """
+def _hermite_root(y0, d0, y1, d1, h, level):
+    """s in [0, 1] where the cubic Hermite interpolant crosses ``level`` (between y0 and y1)."""
     B, C = _hermite(y0, d0, y1, d1, h)
-    s = (level - y0) / (y1 - y0)
+    s = (level - y0) / (y1 - y0) if y1 != y0 else 0.5
     for _ in range(4):
         dp = h * d0 + 2.0 * B * s + 3.0 * C * s * s
-        if dp > 0.0:
+        if dp != 0.0:
             s = min(max(s - (y0 + h * d0 * s + B * s * s + C * s * s * s - level) / dp, 0.0), 1.0)
+    return s
+
+
+@njit(**_JIT)
+def _hermite_crossing_rate(y0, d0, y1, d1, h, level):
+    """Slope dy/dt of the cubic Hermite interpolant where it crosses ``level``."""
+    B, C = _hermite(y0, d0, y1, d1, h)
+    s = _hermite_root(y0, d0, y1, d1, h, level)
     return (h * d0 + 2.0 * B * s + 3.0 * C * s * s) / h
+
+
+@njit(**_JIT)
+def _rk4(x, v, V, dt, f0, fm, f1, wn2, cm, thm, khm, g, ch, irc, thc):
+    """One classical RK4 step of length dt [s].
+
+    f0, fm, f1 are the forcing accelerations A sin(w t) at the start, middle and end of the
+    step [m/s^2]; khm = 0 switches the contact off. Returns x, v, V at the end, the
+    integral of V^2 over the step [V^2 s] and the acceleration at the start [m/s^2].
+    """
+    hh, h6 = 0.5 * dt, dt / 6.0
+    a1, e1 = _derivatives(x, v, V, f0, wn2, cm, thm, khm, g, ch, irc, thc)
+    x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
+    a2, e2 = _derivatives(x2, v2, V2, fm, wn2, cm, thm, khm, g, ch, irc, thc)
+    x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
+    a3, e3 = _derivatives(x3, v3, V3, fm, wn2, cm, thm, khm, g, ch, irc, thc)
+    x4, v4, V4 = x + dt * v3, v + dt * a3, V + dt * e3
+    a4, e4 = _derivatives(x4, v4, V4, f1, wn2, cm, thm, khm, g, ch, irc, thc)
+    return (
+        x + h6 * (v + 2.0 * (v2 + v3) + v4),
+        v + h6 * (a1 + 2.0 * (a2 + a3) + a4),
+        V + h6 * (e1 + 2.0 * (e2 + e3) + e4),
+        h6 * (V * V + 2.0 * (V2 * V2 + V3 * V3) + V4 * V4),
+        a1,
+    )
+
+
+# Sub-step fractions of a piece of step next to a touch or separation, finest at the
+# switch: the Hertz force grows like (t - t_0)^1.5 there, which costs RK4 its order.
+_GRADED = np.array([1 / 64, 1 / 64, 1 / 32, 1 / 16, 1 / 8, 1 / 4, 1 / 2])
+_EQUAL = np.array([0.25, 0.25, 0.25, 0.25])
+_WHOLE = np.array([1.0])
+
+
+@njit(**_JIT)
+def _rk4_pieces(x, v, V, start, length, pieces, reverse, k, n_steps, h, A, wn2, cm, thm, khm,
+                g, ch, irc, thc):
+    """RK4 over the fraction [start, start + length] of step k, in sub-steps of the given
+    fractions of ``length`` (in reverse order when ``reverse``). Returns x, v, V, int V^2 dt."""
+    w = math.pi / n_steps
+    q = 0.0
+    at = start
+    n = pieces.shape[0]
+    for i in range(n):
+        piece = pieces[n - 1 - i] if reverse else pieces[i]
+        dt = piece * length
+        x, v, V, dq, _ = _rk4(x, v, V, dt * h, A * math.sin(w * (2 * k + 2 * at)),
+                              A * math.sin(w * (2 * k + 2 * at + dt)),
+                              A * math.sin(w * (2 * k + 2 * (at + dt))),
+                              wn2, cm, thm, khm, g, ch, irc, thc)
+        q += dq
+        at += dt
+    return x, v, V, q
+
+
+@njit(**_JIT)
+def _switch_step(x, v, V, a0, xn, vn, Vn, on, k, n_steps, h, A, wn2, cm, thm, khm, g, ch,
+                 irc, thc):
+    """Locate the contact switch inside a step.
+
+    The switch is the earliest sign change of x - g (touch, separation) or of 1 + c_h v
+    (the no-tension clip), first placed on the cubic Hermite interpolant of the trial step,
+    then refined by Newton on RK4 sub-steps. The caller integrates up to the switch with
+    the old contact state and after it with the new one, so that no RK4 step straddles the
+    kink of the force. Returns the kind of switch (1: x = g, 2: 1 + c_h v = 0, 0: already
+    across at the start of the step) and the switch time as a fraction theta of the step.
+    """
+    w = math.pi / n_steps  # forcing phase per half step
+    f_end = A * math.sin(w * (2 * k + 2))
+    theta, kind = 2.0, 0
+    if (x - g) * (xn - g) < 0.0:
+        theta, kind = _hermite_root(x, v, xn, vn, h, g), 1
+    if (1.0 + ch * v) * (1.0 + ch * vn) < 0.0:
+        a_end, _ = _derivatives(xn, vn, Vn, f_end, wn2, cm, thm, on * khm, g, ch, irc, thc)
+        s2 = _hermite_root(v, a0, vn, a_end, h, -1.0 / ch)
+        if s2 < theta:
+            theta, kind = s2, 2
+    if kind == 0:  # no sign change in the step: the state was already across at its start
+        theta = 0.0
+    khm_old = on * khm
+    for _ in range(3):  # Newton on the sub-step length
+        dt = theta * h
+        xe, ve, Ve, _, _ = _rk4(x, v, V, dt, A * math.sin(w * 2 * k),
+                                A * math.sin(w * (2 * k + theta)),
+                                A * math.sin(w * (2 * k + 2 * theta)),
+                                wn2, cm, thm, khm_old, g, ch, irc, thc)
+        if kind == 1:
+            residual, rate = xe - g, ve
+        elif kind == 2:
+            ae, _ = _derivatives(xe, ve, Ve, A * math.sin(w * (2 * k + 2 * theta)), wn2, cm,
+                                 thm, khm_old, g, ch, irc, thc)
+            residual, rate = 1.0 + ch * ve, ch * ae
+        else:
+            break
+        if rate != 0.0:
+            theta = min(max(theta - residual / (rate * h), 0.0), 1.0)
+    return kind, theta
 
 
 @njit(**_JIT)
@@ -178,8 +284,8 @@ def run_point(p, y, metrics, strobe, series, settle):
     max_periods = int(p[P_MAXP])
     tol, xlim = p[P_TOL], p[P_XLIM]
     h = p[P_T] / n_steps
-    hh, h6 = 0.5 * h, h / 6.0
     kh = khm * m
+    locate = p[P_LOCATE]
 
     # m A sin(w t) / m at the half steps of one period: sine[j] = A sin(pi j / n_steps).
     sine = np.empty(2 * n_steps + 1)
@@ -195,50 +301,73 @@ def run_point(p, y, metrics, strobe, series, settle):
 
     x, v, V, vimp = y[0], y[1], y[2], y[3]
     ch = latch / vimp if latch > 0.0 else p[P_CH]
+    # Contact state: 1.0 when the force acts. Without location it is always on and the
+    # force switches itself off through max(x - g, 0) and max(1 + c_h v, 0) mid-step.
+    on = 1.0 if locate == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
+    fine = 0  # steps left to take in quarter steps after a touch
     ring[0, 0], ring[0, 1], ring[0, 2] = x, v, V
     status, orbit, n = NOT_SETTLED, 0, 0
     while n < max_periods:
         q = 0.0
         xmax, xmin, vmax, vpk = x, x, abs(v), abs(V)
         d = max(x - g, 0.0)
-        fc = kh * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
+        fc = on * kh * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
         fc_prev, fcmax, n_imp, sum_vimp = fc, fc, 0.0, 0.0
         dV = -irc * V - thc * v
         for k in range(n_steps):
             j = n * n_steps + k
             if j < n_series:
                 series[j, 0], series[j, 1], series[j, 2], series[j, 3] = x, v, V, fc
-            if latch > 0.0 and x <= g and v > 0.0:
+            if latch > 0.0 and locate == 0.0 and x <= g and v > 0.0:
                 ch = latch / v  # predicted approach velocity, refined at first touch below
-            s0, s1, s2 = sine[2 * k], sine[2 * k + 1], sine[2 * k + 2]
-            a1, e1 = _derivatives(x, v, V, s0, wn2, cm, thm, khm, g, ch, irc, thc)
-            x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
-            a2, e2 = _derivatives(x2, v2, V2, s1, wn2, cm, thm, khm, g, ch, irc, thc)
-            x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
-            a3, e3 = _derivatives(x3, v3, V3, s1, wn2, cm, thm, khm, g, ch, irc, thc)
-            x4, v4, V4 = x + h * v3, v + h * a3, V + h * e3
-            a4, e4 = _derivatives(x4, v4, V4, s2, wn2, cm, thm, khm, g, ch, irc, thc)
-            xn = x + h6 * (v + 2.0 * (v2 + v3) + v4)
-            vn = v + h6 * (a1 + 2.0 * (a2 + a3) + a4)
-            Vn = V + h6 * (e1 + 2.0 * (e2 + e3) + e4)
-            q += h6 * (V * V + 2.0 * (V2 * V2 + V3 * V3) + V4 * V4)
+            s0, s2 = sine[2 * k], sine[2 * k + 2]
+            xn, vn, Vn, dq, a0 = _rk4(x, v, V, h, s0, sine[2 * k + 1], s2,
+                                      wn2, cm, thm, on * khm, g, ch, irc, thc)
+            if locate == 0.0:
+                if x <= g < xn:  # first touch, on the cubic Hermite interpolant
+                    v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
+                    n_imp += 1.0
+                    sum_vimp += v_on
+                    if latch > 0.0 and v_on > 0.0:
+                        vimp = v_on
+                        ch = latch / v_on
+            elif (xn > g and 1.0 + ch * vn > 0.0) != (on == 1.0):
+                kind, theta = _switch_step(x, v, V, a0, xn, vn, Vn, on, k, n_steps, h, A, wn2,
+                                           cm, thm, khm, g, ch, irc, thc)
+                # Up to the switch with the old contact state (graded towards a separation)...
+                xe, ve, Ve, q1 = _rk4_pieces(
+                    x, v, V, 0.0, theta, _GRADED if on == 1.0 and kind == 1 else _WHOLE,
+                    True, k, n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
+                onset = on == 0.0 and kind == 1
+                if onset:
+                    n_imp += 1.0
+                    sum_vimp += ve
+                    if latch > 0.0 and ve > 0.0:
+                        vimp = ve
+                        ch = latch / ve
+                on = 1.0 - on
+                # ... and after it with the new one (graded from a touch).
+                xn, vn, Vn, q2 = _rk4_pieces(
+                    xe, ve, Ve, theta, 1.0 - theta, _GRADED if onset else _WHOLE, False,
+                    k, n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
+                dq = q1 + q2
+                fine = 3 if onset else 0
+            elif fine > 0 or (on == 1.0 and v < 0.0 and x - g < -3.0 * h * v):
+                # The steps just after a touch or before a separation still see the
+                # (t - t_0)^1.5 force: quarter steps there.
+                xn, vn, Vn, dq = _rk4_pieces(x, v, V, 0.0, 1.0, _EQUAL, False, k, n_steps, h,
+                                             A, wn2, cm, thm, on * khm, g, ch, irc, thc)
+                fine -= 1
+            q += dq
             dVn = -irc * Vn - thc * vn
 
-            # Events inside the step, located on the cubic Hermite interpolant.
-            if x <= g < xn:  # first touch
-                v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
-                n_imp += 1.0
-                sum_vimp += v_on
-                if latch > 0.0 and v_on > 0.0:
-                    vimp = v_on
-                    ch = latch / v_on
             if v > 0.0 >= vn or v < 0.0 <= vn:
                 xe = _hermite_extremum(x, v, xn, vn, h)
                 xmax, xmin = max(xmax, xe), min(xmin, xe)
             if (dV > 0.0) != (dVn > 0.0):
                 vpk = max(vpk, abs(_hermite_extremum(V, dV, Vn, dVn, h)))
             d = max(xn - g, 0.0)
-            fcn = kh * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
+            fcn = on * kh * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
             if fc_prev > 0.0 and fc >= fc_prev and fc > fcn:  # parabola through the peak
                 a = 0.5 * (fc_prev + fcn) - fc
                 b = 0.5 * (fcn - fc_prev)

@@ -40,6 +40,8 @@ class Parameter:
     def range_text(self) -> str:
         if self.kind == "choice":
             return "one of " + ", ".join(self.choices)
+        if self.kind == "bool":
+            return "true or false"
         if self.low is None and self.high is None:
             return "any finite number"
         lo = "-inf" if self.low is None else f"{self.low:g}"
@@ -54,6 +56,13 @@ class Parameter:
         if self.optional and value is None:
             return None
         unit = f" [{'-' if self.unit == '1' else self.unit}]"
+        if self.kind == "bool":
+            text = str(value).strip().lower()
+            if text in ("true", "1", "yes", "1.0"):
+                return True
+            if text in ("false", "0", "no", "0.0"):
+                return False
+            raise ParameterError(f"{self.name}{unit} = {value!r}: must be true or false")
         if self.kind == "choice":
             if value not in self.choices:
                 raise ParameterError(f"{self.name}{unit} = {value!r}: must be {self.range_text()}")
@@ -126,6 +135,13 @@ PARAMETERS: dict[str, Parameter] = {
         ),
         _P("tip_material", "1", "tip mass material", kind="choice", choices=tuple(MATERIALS)),
         _P("stop_material", "1", "stop material", kind="choice", choices=tuple(MATERIALS)),
+        _P(
+            "locate_switches",
+            "1",
+            "locate contact onset, separation and the no-tension switch inside the step and "
+            "integrate the pieces separately (False: plain fixed steps across the switch)",
+            kind="bool",
+        ),
         _P("steps_per_period", "1", "RK4 steps per forcing period", kind="int", low=16, high=1e8),
         _P("max_periods", "1", "budget of forcing periods to reach steady state", kind="int",
            low=1, high=1e8),
@@ -162,6 +178,7 @@ _TABLE_1 = dict(
     steps_per_period=1024,
     max_periods=10000,
     settle_tolerance=1e-10,
+    locate_switches=True,
 )
 _D33 = 190e-12  # m/V, Table 1
 _K_TABLE_1 = _TABLE_1["mass"] * (2 * math.pi * _TABLE_1["natural_frequency"]) ** 2
@@ -264,7 +281,7 @@ def parse_assignment(text: str) -> tuple[str, object]:
         )
     raw = raw.strip()
     spec = PARAMETERS[name]
-    if spec.kind == "choice":
+    if spec.kind in ("choice", "bool"):
         return name, raw
     if spec.optional and raw.lower() in ("", "none"):
         return name, None
