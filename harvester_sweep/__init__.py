@@ -2,6 +2,8 @@
 
 from .parameters import PARAMETERS, PRESETS, ParameterError, resolve_parameters
 from .scene import SceneResult, run_scene
+from .sweep import run_sweep
+from .sweep_file import SweepSpec, load_sweep
 
 __version__ = "0.1.0"
 
@@ -10,7 +12,10 @@ __all__ = [
     "PRESETS",
     "ParameterError",
     "SceneResult",
+    "SweepSpec",
     "__version__",
+    "load_sweep",
     "resolve_parameters",
     "run_scene",
+    "run_sweep",
 ]

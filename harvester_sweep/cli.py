@@ -10,6 +10,7 @@ from .parameters import PARAMETERS, PRESETS, ParameterError, parse_assignment
 
 EXIT_USER_ERROR = 2
 EXIT_DIVERGED = 3
+EXIT_INTERRUPTED = 130  # the shell's code for a run stopped by Ctrl-C (128 + SIGINT)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -35,6 +36,27 @@ def _parser() -> argparse.ArgumentParser:
                        help="write the last orbit periods and the metrics to netCDF")
 
     sub.add_parser("parameters", help="list the parameters, their units, ranges and presets")
+
+    run = sub.add_parser("run", help="run a sweep file (TOML) into a netCDF dataset",
+                         description="Run every point of a sweep file to steady state and write "
+                         "the frequency-response / bifurcation dataset (see "
+                         "examples/paper_frequency_response.toml).")
+    run.add_argument("sweep_file", metavar="SWEEP.toml", help="the sweep file")
+    run.add_argument("--output", required=True, metavar="OUT.nc", help="netCDF file to write")
+    run.add_argument("--resume", action="store_true",
+                     help="finish an interrupted run from the chunks in OUT.nc.partial/")
+    run.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    where = run.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="run the chunks on a local dask cluster of N worker processes")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run the chunks on a running dask.distributed scheduler, "
+                       "e.g. tcp://127.0.0.1:8786")
+
+    plot = sub.add_parser("plot", help="draw a sweep (or scene) netCDF file")
+    plot.add_argument("dataset", metavar="OUT.nc", help="a file written by 'run' or 'scene'")
+    plot.add_argument("--output", required=True, metavar="FIG.png",
+                      help="figure to write (.png, .pdf or .svg)")
     return parser
 
 
@@ -43,6 +65,10 @@ def main(argv=None) -> int:
     try:
         if args.command == "parameters":
             return _print_parameters()
+        if args.command == "run":
+            return _run(args)
+        if args.command == "plot":
+            return _plot(args)
         return _scene(args)
     except ParameterError as error:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
@@ -78,6 +104,51 @@ def _scene(args) -> int:
         result.to_netcdf(args.output)
     if args.plot:
         result.plot(args.plot)
+    return 0
+
+
+def _check_suffix(path: str, suffixes: tuple) -> None:
+    if not path.lower().endswith(suffixes):
+        raise ParameterError(f"{path!r}: the file name must end in {' or '.join(suffixes)}")
+
+
+def _run(args) -> int:
+    from .sweep import run_sweep
+
+    _check_suffix(args.output, (".nc",))
+    try:
+        ds = run_sweep(args.sweep_file, args.output, resume=args.resume,
+                       progress=not args.quiet, workers=args.workers, scheduler=args.scheduler)
+    except KeyboardInterrupt:
+        print(f"harvester-sweep: interrupted; the finished chunks are kept in "
+              f"{args.output}.partial/: run the same command with --resume to finish",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    counts = [int((ds["status"] == code).sum()) for code in range(3)]
+    if counts[2]:
+        print(f"harvester-sweep: warning: {counts[2]} of {ds['status'].size} points diverged "
+              "(status = 2, NaN metrics): raise steps_per_period", file=sys.stderr)
+    if counts[1]:
+        print(f"harvester-sweep: warning: {counts[1]} of {ds['status'].size} points did not "
+              "settle within max_periods (status = 1)", file=sys.stderr)
+    if not args.quiet:
+        print(f"harvester-sweep: {ds['status'].size} points ({counts[0]} settled) in "
+              f"{ds.attrs['run_time']:.3g} s of integration: {args.output}", file=sys.stderr)
+    return 0
+
+
+def _plot(args) -> int:
+    import xarray as xr
+
+    from .plots import plot_scene, plot_sweep
+
+    _check_suffix(args.output, (".png", ".pdf", ".svg"))
+    try:
+        ds = xr.open_dataset(args.dataset)
+    except (OSError, ValueError) as error:
+        raise ParameterError(f"{args.dataset}: cannot read it as netCDF ({error})") from None
+    with ds:
+        (plot_scene if "time" in ds.dims else plot_sweep)(ds, args.output)
     return 0
 
 

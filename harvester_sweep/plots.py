@@ -51,3 +51,146 @@ def plot_scene(ds, path=None) -> Figure:
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
+
+
+_LINE_STYLES = {"up": dict(color="C0", ls="-", marker="^"), "down": dict(color="C3", ls="--",
+                                                                        marker="v"),
+                None: dict(color="C0", ls="-", marker=".")}
+
+
+def plot_sweep(ds, path=None) -> Figure:
+    """Draw what a sweep dataset holds (see ``run_sweep``).
+
+    One grid axis: power [W] and x_max [m] against the axis, one curve per direction, with
+    the closed-form response without the stop for comparison; bifurcation diagrams
+    (stroboscopic x [m] and V [V] against the axis) when the dataset has ``sample``.
+    Two grid axes: maps of the power [W] over the two axes, one per direction.
+
+    Raises
+    ------
+    ParameterError
+        For a dataset with more than two grid axes: select a slice first (``ds.isel``).
+    """
+    from .parameters import ParameterError
+
+    axes_names = [d for d in ds.dims if d not in ("direction", "sample")]
+    if len(axes_names) == 1:
+        return _save(_plot_lines(ds, axes_names[0]), path)
+    if len(axes_names) == 2:
+        return _save(_plot_maps(ds, axes_names), path)
+    raise ParameterError(f"the dataset has {len(axes_names)} grid axes ({', '.join(axes_names)}): "
+                         "plot draws one or two; select a slice first, e.g. ds.isel(gap=0)")
+
+
+def _save(fig: Figure, path) -> Figure:
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
+
+
+def _directions(ds) -> list:
+    return [str(d) for d in ds["direction"].values] if "direction" in ds.dims else [None]
+
+
+def _label(ds, name: str, prefix: str = "") -> str:
+    unit = ds[name].attrs.get("units", "1")
+    return f"{name} [{prefix}{'-' if unit == '1' else unit}]"
+
+
+def _set_scale(ax, ds, name: str, axis: str = "x") -> None:
+    if ds[name].attrs.get("grid_spacing") == "log":
+        (ax.set_xscale if axis == "x" else ax.set_yscale)("log")
+
+
+def _plot_lines(ds, axis: str) -> Figure:
+    """Responses (and bifurcation diagrams) against one grid axis."""
+    from .linear import linear_response
+    from .parameters import PARAMETERS
+
+    responses = [name for name in ("power", "x_max") if name in ds]
+    strobes = [name for name in ("strobe_displacement", "strobe_voltage") if name in ds]
+    n = max(len(responses) + len(strobes), 1)
+    fig = Figure(figsize=(8, 2.8 * n + 0.6), layout="constrained")
+    panels = list(np.atleast_1d(fig.subplots(n, 1, sharex=True)))
+    x = ds[axis].values
+    point = {**{name: ds.attrs[name] for name in PARAMETERS if name in ds.attrs}, axis: x}
+    X, V = linear_response(**point)
+    linear = {"power": np.abs(V) ** 2 / (2 * point["resistance"]), "x_max": np.abs(X)}
+    for ax, name in zip(panels, responses):
+        scale, prefix = _prefix(ds[name].values) if name == "x_max" else (1.0, "")
+        for direction in _directions(ds):
+            values = ds[name].sel(direction=direction) if direction else ds[name]
+            ax.plot(x, values / scale, ms=3, lw=1.0, label=f"{direction or 'from rest'}",
+                    **_LINE_STYLES[direction])
+        ax.plot(x, linear[name] / scale, color="0.4", lw=0.8, ls=":",
+                label="no stop (closed form)")
+        if name == "power":
+            ax.set_yscale("log")
+        else:
+            top = np.nanmax(ds[name].values)
+            if "gap" in ds.attrs:
+                gap = float(ds.attrs["gap"])
+                ax.axhline(gap / scale, color="0.2", lw=0.8, ls="-.", label="stop")
+                top = max(top, gap)
+            # From 0 to just above the data and the stop: the closed form peaks far higher.
+            ax.set_ylim(min(0.0, np.nanmin(ds[name].values)) / scale, 1.15 * top / scale)
+        ax.set_ylabel(_label(ds, name, prefix))
+        ax.legend(fontsize="small")
+    for ax, name in zip(panels[len(responses):], strobes):
+        scale, prefix = _prefix(ds[name].values)
+        for direction in _directions(ds):
+            values = ds[name].sel(direction=direction) if direction else ds[name]
+            xs = np.broadcast_to(x[:, None], values.shape)
+            ax.plot(xs.ravel(), values.values.ravel() / scale, ls="none", marker=".", ms=2,
+                    color=_LINE_STYLES[direction]["color"], alpha=0.5)
+            ax.plot([], [], ls="none", marker="o", ms=3, label=direction or "from rest",
+                    color=_LINE_STYLES[direction]["color"])
+        ax.set_ylabel(f"{name.replace('strobe_', '')} y(nT) [{prefix}{ds[name].attrs['units']}]")
+        ax.set_title(f"bifurcation diagram: last {ds.sizes['sample']} stroboscopic samples",
+                     loc="left", fontsize="medium")
+        ax.legend(fontsize="small", markerscale=1)
+    for ax in panels:
+        ax.grid(alpha=0.3)
+        if ax.get_yscale() == "linear":
+            ax.ticklabel_format(axis="y", useOffset=False)
+        _set_scale(ax, ds, axis)
+    panels[-1].set_xlabel(_label(ds, axis))
+    fig.suptitle(_title(ds, [axis]))
+    return fig
+
+
+def _plot_maps(ds, axes_names: list) -> Figure:
+    """Maps of the power (else the first metric held) over two grid axes."""
+    from matplotlib.colors import LogNorm
+
+    name = next((n for n in ("power", "x_max", "v_rms") if n in ds),
+                next(n for n in ds.data_vars if "sample" not in ds[n].dims))
+    x_name, y_name = sorted(axes_names, key=lambda a: a != "frequency")  # frequency across
+    directions = _directions(ds)
+    fig = Figure(figsize=(6 * len(directions), 4.8), layout="constrained")
+    panels = np.atleast_1d(fig.subplots(1, len(directions), sharey=True))
+    values = ds[name].values
+    positive = values[np.isfinite(values) & (values > 0)]
+    norm = LogNorm(positive.min(), positive.max()) if positive.size and name == "power" else None
+    for ax, direction in zip(panels, directions):
+        field = ds[name].sel(direction=direction) if direction else ds[name]
+        mesh = ax.pcolormesh(ds[x_name].values, ds[y_name].values,
+                             field.transpose(y_name, x_name).values, norm=norm, shading="nearest")
+        ax.set_title(f"{name}: {direction or 'each point from rest'}", loc="left",
+                     fontsize="medium")
+        ax.set_xlabel(_label(ds, x_name))
+        _set_scale(ax, ds, x_name)
+        _set_scale(ax, ds, y_name, "y")
+    panels[0].set_ylabel(_label(ds, y_name))
+    fig.colorbar(mesh, ax=list(panels), label=_label(ds, name))
+    fig.suptitle(_title(ds, axes_names))
+    return fig
+
+
+def _title(ds, axes_names: list) -> str:
+    from .parameters import PARAMETERS
+
+    shown = [f"{n} = {ds.attrs[n]:g} {PARAMETERS[n].unit}" for n in ("gap", "resistance",
+                                                                    "frequency")
+             if n in ds.attrs and n not in axes_names and not isinstance(ds.attrs[n], str)]
+    return f"preset {ds.attrs.get('preset', '?')}: " + ", ".join(shown)

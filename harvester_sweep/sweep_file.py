@@ -1,0 +1,329 @@
+"""Sweep files: TOML (or a dict of the same shape) read and checked into a :class:`SweepSpec`.
+
+A sweep file::
+
+    preset = "paper"
+    [parameters]            # fixed values, SI units, any name of PARAMETERS
+    gap = 1e-6
+    [grid]                  # one axis per parameter: a list, or a range table
+    frequency = { start = 100, stop = 300, num = 201 }        # [Hz]
+    resistance = [1e3, 1e4, 1e5]                              # [Ohm]
+    [sweep]
+    directions = ["up", "down"]   # continue the state along frequency (omit: each point from rest)
+    outputs = ["power", "x_max", "strobe"]
+    samples = 64                  # stroboscopic samples kept per point when "strobe" is asked
+    chunk_size = 4096             # points per chunk file (rounded to whole frequency lines)
+
+Everything is checked before any integration; a bad entry raises :class:`ParameterError`
+naming its key.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import numbers
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import kernel
+from .parameters import PARAMETERS, ParameterError, resolve_parameters
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+#: What ``sweep.outputs`` may name: the kernel metrics, and "strobe" for bifurcation diagrams.
+#: ``status`` and ``periods_run`` are always stored: without them no value can be trusted.
+ALWAYS_STORED = ("status", "periods_run")
+METRIC_OUTPUTS = tuple(name for name in kernel.METRIC_NAMES if name not in ALWAYS_STORED)
+OUTPUTS = METRIC_OUTPUTS + ("strobe",)
+DIRECTIONS = ("up", "down")
+DEFAULT_SAMPLES = 32
+DEFAULT_CHUNK_SIZE = 4096
+
+_TOP_KEYS = ("preset", "parameters", "grid", "sweep")
+_SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size")
+_RANGE_KEYS = ("start", "stop", "num", "scale")
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A checked sweep.
+
+    Attributes
+    ----------
+    preset : str
+        Preset the fixed parameters start from.
+    fixed : dict
+        Overrides of ``[parameters]`` (SI units), not including the grid axes.
+    grid : dict of str -> numpy.ndarray
+        Grid axis name -> values (SI units of the parameter), in file order. With
+        ``directions``, the frequency axis is sorted ascending.
+    spacing : dict of str -> str
+        Grid axis name -> ``"linear"``, ``"log"`` or ``"list"`` (how the values were given).
+    directions : tuple of str
+        ``("up",)``, ``("down",)``, ``("up", "down")``, or ``()`` for points run from rest.
+    metrics : tuple of str
+        Metric names stored, always ending with ``status`` and ``periods_run``.
+    samples : int
+        Stroboscopic samples stored per point, 0 when "strobe" is not asked.
+    chunk_size : int
+        Points per chunk, before rounding to whole frequency lines.
+    """
+
+    preset: str
+    fixed: dict
+    grid: dict
+    spacing: dict
+    directions: tuple
+    metrics: tuple
+    samples: int
+    chunk_size: int
+
+    @property
+    def continuation(self) -> bool:
+        """True when each point starts from the previous frequency's final state."""
+        return bool(self.directions)
+
+    @property
+    def line_axes(self) -> tuple:
+        """Grid axes that index independent lines (all but frequency under continuation)."""
+        return tuple(a for a in self.grid if not (self.continuation and a == "frequency"))
+
+    @property
+    def line_length(self) -> int:
+        """Points per line: the frequency axis under continuation, else 1."""
+        return len(self.grid["frequency"]) if self.continuation else 1
+
+    @property
+    def line_shape(self) -> tuple:
+        """Shape of the array of lines: (direction,) if any, then the line axes."""
+        dirs = (len(self.directions),) if self.continuation else ()
+        return dirs + tuple(len(self.grid[a]) for a in self.line_axes)
+
+    @property
+    def n_lines(self) -> int:
+        return math.prod(self.line_shape)
+
+    @property
+    def n_points(self) -> int:
+        return self.n_lines * self.line_length
+
+    @property
+    def lines_per_chunk(self) -> int:
+        return max(1, self.chunk_size // self.line_length)
+
+    @property
+    def n_chunks(self) -> int:
+        return -(-self.n_lines // self.lines_per_chunk)
+
+    def point_parameters(self, values: dict) -> dict:
+        """Validated parameters of one point from its grid ``values`` (SI units)."""
+        return resolve_parameters(self.preset, **self.fixed, **values)
+
+    def canonical(self) -> str:
+        """JSON text that identifies the sweep (what a partial result must match)."""
+        from . import __version__
+
+        return json.dumps(
+            {
+                "version": __version__,
+                # Chunks made by another kernel would not match: a development install
+                # changes the kernel without changing the version.
+                "kernel_sha256": hashlib.sha256(Path(kernel.__file__).read_bytes()).hexdigest(),
+                "preset": self.preset,
+                "parameters": resolve_parameters(self.preset, **self.fixed),
+                "grid": {name: values.tolist() for name, values in self.grid.items()},
+                "directions": list(self.directions),
+                "metrics": list(self.metrics),
+                "samples": self.samples,
+                "chunk_size": self.chunk_size,
+            },
+            sort_keys=True,
+        )
+
+    def digest(self) -> str:
+        """SHA-256 of :meth:`canonical`."""
+        return hashlib.sha256(self.canonical().encode()).hexdigest()
+
+
+def load_sweep(source) -> SweepSpec:
+    """A checked :class:`SweepSpec` from a TOML file path or a dict of the same shape.
+
+    Raises
+    ------
+    ParameterError
+        For a missing or unreadable file, an unknown key, an empty, non-finite or
+        out-of-range grid, or options that contradict each other; the message names the key.
+    """
+    if isinstance(source, SweepSpec):
+        return source
+    if isinstance(source, (str, Path)):
+        path = Path(source)
+        try:
+            with path.open("rb") as handle:
+                source = tomllib.load(handle)
+        except OSError as error:
+            raise ParameterError(f"{path}: cannot read the sweep file ({error.strerror})") from None
+        except tomllib.TOMLDecodeError as error:
+            raise ParameterError(f"{path}: not valid TOML: {error}") from None
+    if not isinstance(source, dict):
+        raise ParameterError("a sweep is a TOML file path or a dict with keys "
+                             + ", ".join(_TOP_KEYS))
+    _unknown(source, _TOP_KEYS, "")
+    preset = source.get("preset", "paper")
+    fixed = dict(_table(source, "parameters"))
+    base = resolve_parameters(preset, **fixed)  # names unknown parameters and bad values
+    grid, spacing = {}, {}
+    for name, entry in _table(source, "grid").items():
+        grid[name], spacing[name] = _axis(name, entry, fixed)
+    if not grid:
+        raise ParameterError("grid: give at least one parameter to sweep, e.g. "
+                             "frequency = { start = 100, stop = 300, num = 201 }")
+    options = _table(source, "sweep")
+    _unknown(options, _SWEEP_KEYS, "sweep.")
+    directions = _directions(options, grid)
+    if directions:
+        grid["frequency"] = np.sort(grid["frequency"])  # "up" means increasing frequency
+    outputs = _string_list(options, "outputs", OUTPUTS, list(METRIC_OUTPUTS))
+    samples = 0
+    if "strobe" in outputs:
+        samples = _integer(options, "samples", DEFAULT_SAMPLES)
+    elif "samples" in options:
+        raise ParameterError('sweep.samples: stroboscopic samples need "strobe" in sweep.outputs')
+    metrics = tuple(n for n in METRIC_OUTPUTS if n in outputs or (samples and n == "orbit_period"))
+    spec = SweepSpec(preset, fixed, grid, spacing, directions, metrics + ALWAYS_STORED, samples,
+                     _integer(options, "chunk_size", DEFAULT_CHUNK_SIZE))
+    _check_corners(spec)
+    if samples:
+        budget = int(grid["max_periods"].min()) if "max_periods" in grid else base["max_periods"]
+        if samples > budget:
+            raise ParameterError(f"sweep.samples = {samples}: more than max_periods = {budget:g}, "
+                                 "the most forcing periods a point runs")
+    return spec
+
+
+def _unknown(table: dict, known, prefix: str) -> None:
+    for key in table:
+        if key not in known:
+            raise ParameterError(f"{prefix}{key}: unknown key; known keys are {', '.join(known)}")
+
+
+def _table(source: dict, key: str) -> dict:
+    value = source.get(key, {})
+    if not isinstance(value, dict):
+        raise ParameterError(f"{key}: must be a table, e.g. [{key}]")
+    return value
+
+
+def _axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
+    """Values [SI] and spacing of one grid axis, each value checked against its range."""
+    key = f"grid.{name}"
+    if name not in PARAMETERS:
+        raise ParameterError(f"{key}: unknown parameter; known parameters are "
+                             + ", ".join(PARAMETERS))
+    parameter = PARAMETERS[name]
+    if parameter.kind not in ("float", "int"):
+        raise ParameterError(f"{key}: only numeric parameters can be swept ({name} is "
+                             f"{parameter.range_text()}); set it in [parameters]")
+    if name in fixed:
+        raise ParameterError(f"{key}: {name} is also set in [parameters]; give it in one place")
+    if isinstance(entry, dict):
+        values, spacing = _range(key, entry), entry.get("scale", "linear")
+    elif isinstance(entry, (list, tuple, np.ndarray)):
+        values, spacing = list(np.asarray(entry, dtype=object).ravel()), "list"
+        if not values:
+            raise ParameterError(f"{key}: the list of values is empty")
+    else:
+        raise ParameterError(f"{key}: give a list of values or a table "
+                             "{ start, stop, num, scale = \"linear\" | \"log\" }")
+    unit = f" [{'-' if parameter.unit == '1' else parameter.unit}]"
+    checked = []
+    for value in values:
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ParameterError(f"{key}{unit} = {value!r} is not a number")
+        try:
+            checked.append(parameter.check(value))
+        except ParameterError as error:
+            raise ParameterError(f"grid.{error}") from None
+    return np.asarray(checked, dtype=np.int64 if parameter.kind == "int" else np.float64), spacing
+
+
+def _range(key: str, entry: dict) -> np.ndarray:
+    """Values of a range table ``{start, stop, num, scale}``."""
+    _unknown(entry, _RANGE_KEYS, f"{key}.")
+    for part in ("start", "stop", "num"):
+        if part not in entry:
+            raise ParameterError(f"{key}.{part}: missing; a range is "
+                                 "{ start, stop, num, scale = \"linear\" | \"log\" }")
+    start, stop, num = entry["start"], entry["stop"], entry["num"]
+    for part, value in (("start", start), ("stop", stop)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                or not math.isfinite(value):
+            raise ParameterError(f"{key}.{part} = {value!r}: must be a finite number")
+    if isinstance(num, bool) or not isinstance(num, numbers.Integral) or num < 1:
+        raise ParameterError(f"{key}.num = {num!r}: must be an integer >= 1")
+    scale = entry.get("scale", "linear")
+    if scale == "linear":
+        return np.linspace(start, stop, num)
+    if scale == "log":
+        if start <= 0 or stop <= 0:
+            raise ParameterError(f"{key}: scale = \"log\" needs start > 0 and stop > 0 "
+                                 f"(got start = {start!r}, stop = {stop!r})")
+        return np.geomspace(start, stop, num)
+    raise ParameterError(f"{key}.scale = {scale!r}: must be \"linear\" or \"log\"")
+
+
+def _directions(options: dict, grid: dict) -> tuple:
+    if "directions" not in options:
+        return ()
+    directions = _string_list(options, "directions", DIRECTIONS, None)
+    if "frequency" not in grid:
+        raise ParameterError("sweep.directions: continuation runs along frequency, which is "
+                             "not a grid axis; add grid.frequency or remove sweep.directions")
+    return tuple(d for d in DIRECTIONS if d in directions)
+
+
+def _string_list(options: dict, key: str, allowed, default) -> list:
+    value = options.get(key, default)
+    if not isinstance(value, list) or not value:
+        raise ParameterError(f"sweep.{key}: must be a non-empty list of "
+                             + ", ".join(f'"{a}"' for a in allowed))
+    for item in value:
+        if item not in allowed:
+            raise ParameterError(f"sweep.{key}: {item!r} is unknown; must be among "
+                                 + ", ".join(f'"{a}"' for a in allowed))
+    return value
+
+
+def _integer(options: dict, key: str, default: int) -> int:
+    value = options.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ParameterError(f"sweep.{key} = {value!r}: must be an integer >= 1")
+    return value
+
+
+def _check_corners(spec: SweepSpec) -> None:
+    """Check the parameter sets at the corners of the grid before any work.
+
+    Each value was checked against its own range; what remains are the checks that couple
+    parameters (the step against the fastest oscillation and the load circuit's decay,
+    hertz_stiffness against stop_mass). These are monotonic in each parameter, so the
+    grid's extreme values are where they fail first.
+    """
+    extremes = [(name, sorted({float(values.min()), float(values.max())}))
+                for name, values in spec.grid.items()]
+    for corner in itertools.product(*(values for _, values in extremes)):
+        values = {name: value for (name, _), value in zip(extremes, corner)}
+        try:
+            spec.point_parameters(values)
+        except ParameterError as error:
+            at = ", ".join(f"{name} = {value:g}" for name, value in values.items())
+            raise ParameterError(f"grid: at the grid point {at}: {error}") from None
