@@ -7,6 +7,7 @@ command line, the Python API, the datasets and the docs all use these names.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 from .contact import CONTACT_LAWS, IMPACT_VELOCITY_MODES
@@ -142,7 +143,12 @@ PARAMETERS: dict[str, Parameter] = {
             "integrate the pieces separately (False: plain fixed steps across the switch)",
             kind="bool",
         ),
-        _P("steps_per_period", "1", "RK4 steps per forcing period", kind="int", low=16, high=1e8),
+        _P("steps_per_period", "1", "RK4 steps per forcing period (unset: chosen per point "
+           "from the time scales and `accuracy`)", kind="int", low=16, high=1e9, optional=True),
+        _P("accuracy", "1", "target relative error of the metrics, used to choose "
+           "steps_per_period when it is not given", low=1e-13, high=1e-2),
+        _P("max_steps_per_period", "1", "most steps per period the automatic choice may take; "
+           "a point that needs more is refused as too stiff", kind="int", low=16, high=1e9),
         _P("max_periods", "1", "budget of forcing periods to reach steady state", kind="int",
            low=1, high=1e8),
         _P(
@@ -175,7 +181,9 @@ _TABLE_1 = dict(
     stop_mass=None,
     tip_material="copper",
     stop_material="steel",
-    steps_per_period=1024,
+    steps_per_period=None,
+    accuracy=1e-7,
+    max_steps_per_period=2_000_000,
     max_periods=10000,
     settle_tolerance=1e-10,
     locate_switches=True,
@@ -242,13 +250,31 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
     return checked
 
 
-#: Explicit RK4 is stable for h * rate <= 2.78 on a decaying mode; keep a margin.
-RK4_RATE_BOUND = 2.5
+class StabilityWarning(UserWarning):
+    """An explicit step is beyond the estimated RK4 stability bound of the contact."""
 
 
 def _check_step(p: dict) -> None:
-    """The step must resolve the forcing and natural oscillations (16 steps per cycle) and
-    keep the load circuit's decay rate 1/(R C_p) inside RK4's stability bound."""
+    """Choose steps_per_period when unset; check an explicit one.
+
+    An explicit step must resolve the forcing and natural oscillations (16 steps per cycle)
+    and keep the load circuit's exact decay rate 1/(R C_p) inside RK4's stability bound
+    (errors); beyond the estimated contact bound it only warns, as that bound is an estimate.
+    """
+    from . import stepping
+
+    if p["steps_per_period"] is None:
+        steps = stepping.auto_steps_per_period(p)
+        if steps > p["max_steps_per_period"]:
+            rate, what = stepping.time_scales(p).fastest()
+            raise ParameterError(
+                f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
+                f"{1 / (p['frequency'] * steps):.3g} s, {steps} steps per period, about "
+                f"{stepping.run_time_estimate(steps):.0f} s per point; raise "
+                f"max_steps_per_period [-] (now {p['max_steps_per_period']}) to run it anyway"
+            )
+        p["steps_per_period"] = steps
+        return
     fastest = max(p["frequency"], p["natural_frequency"])
     step = 1.0 / (p["frequency"] * p["steps_per_period"])
     needed = math.ceil(16 * fastest / p["frequency"])
@@ -259,13 +285,23 @@ def _check_step(p: dict) -> None:
             f">= {needed}"
         )
     tau = p["resistance"] * p["capacitance"]
-    needed = math.ceil(1.0 / (p["frequency"] * RK4_RATE_BOUND * tau))
+    bound = stepping.RK4_STABILITY
+    needed = math.ceil(1.0 / (p["frequency"] * bound * tau))
     if p["steps_per_period"] < needed:
         raise ParameterError(
             f"steps_per_period [-] = {p['steps_per_period']}: the step {step:.3g} s exceeds "
-            f"RK4's stability bound {RK4_RATE_BOUND} R C_p = {RK4_RATE_BOUND * tau:.3g} s of the "
-            f"load circuit (resistance {p['resistance']:g} Ohm, capacitance "
-            f"{p['capacitance']:g} F): must be an integer >= {needed}"
+            f"RK4's stability bound {bound} R C_p = {bound * tau:.3g} s of the load circuit "
+            f"(resistance {p['resistance']:g} Ohm, capacitance {p['capacitance']:g} F): must be "
+            f"an integer >= {needed}"
+        )
+    needed, what = stepping.stability_steps(p)
+    if p["steps_per_period"] < needed:
+        warnings.warn(
+            f"steps_per_period = {p['steps_per_period']}: the step {step:.3g} s is beyond the "
+            f"estimated RK4 stability bound {bound}/rate = {step * p['steps_per_period'] / needed:.3g} s "
+            f"of {what}; the run may diverge: use >= {needed} or leave steps_per_period unset",
+            StabilityWarning,
+            stacklevel=4,
         )
 
 

@@ -22,7 +22,7 @@ def test_scene_json_has_every_metric(capsys):
     metrics = json.loads(capsys.readouterr().out)
     assert JSON_KEYS <= set(metrics)
     assert metrics["converged"] is True and metrics["status"] == "settled"
-    assert metrics["steps_per_period"] == 1024
+    assert isinstance(metrics["steps_per_period"], int) and metrics["steps_per_period"] >= 64
 
 
 def test_scene_table_is_readable(capsys):

@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 
 from harvester_sweep import PARAMETERS, ParameterError, resolve_parameters, run_scene
 from harvester_sweep.materials import MATERIALS, hertz_stiffness_from_bodies
+from harvester_sweep.parameters import StabilityWarning
 
 FLOATS = [name for name, spec in PARAMETERS.items() if spec.kind == "float"]
 
@@ -45,7 +46,29 @@ def test_step_too_coarse_for_forcing_or_circuit():
     with pytest.raises(ParameterError, match="steps_per_period .* >= 18"):
         resolve_parameters("paper", frequency=140.0, natural_frequency=150.0, steps_per_period=16)
     with pytest.raises(ParameterError, match="stability bound .* load circuit"):
-        resolve_parameters("paper", resistance=10.0)
+        resolve_parameters("paper", resistance=10.0, steps_per_period=1024)
+
+
+def test_automatic_step_respects_every_bound():
+    """Unset steps_per_period: resolved per point within the circuit and contact bounds."""
+    p = resolve_parameters("paper", resistance=10.0)
+    step = 1 / (p["frequency"] * p["steps_per_period"])
+    assert step <= 2.5 * 10.0 * 100e-9
+    stiff = resolve_parameters("paper", hertz_stiffness=9.03e11)
+    assert stiff["steps_per_period"] > 8 * resolve_parameters("paper")["steps_per_period"]
+    default = resolve_parameters("paper")["steps_per_period"]
+    assert resolve_parameters("paper", accuracy=1e-9)["steps_per_period"] > 2 * default
+
+
+def test_explicit_step_beyond_contact_bound_warns():
+    with pytest.warns(StabilityWarning, match="stability bound .* contact"):
+        resolve_parameters("paper", hertz_stiffness=9.03e11, steps_per_period=512)
+
+
+def test_too_stiff_is_refused_with_step_and_time():
+    with pytest.raises(ParameterError, match=r"too stiff: .* needs a step <= .* s, \d+ steps "
+                       r"per period, about \d+ s per point"):
+        resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
 
 
 def test_paper_preset_states_its_assumptions():

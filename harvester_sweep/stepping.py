@@ -1,0 +1,120 @@
+"""Time scales of a point, RK4 stability bounds and the default steps per period.
+
+The fastest motion is usually the contact: linearised about the expected penetration delta,
+the Hertz spring has the angular frequency ``w_c = sqrt(1.5 k_h sqrt(delta) / m)`` and the
+contact damping the rate ``k_h delta^1.5 c_h / m``. The penetration is estimated from the
+impact energy, ``1/2 m v^2 = 2/5 k_h delta^2.5`` (elastic), or, when the damping stops the
+mass first, from ``1/2 m v^2 = 2/5 k_h c_h v delta^2.5`` (plastic), whichever is smaller,
+with ``v`` the larger linear-response velocity amplitude at the forcing and at the natural
+frequency (impacts are strongest near resonance, and the stop makes the response hardening).
+A stop beyond twice the corresponding displacement is taken as out of reach.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .contact import damping_factor
+
+#: |h lambda| that RK4 keeps stable (2.78 on the negative real axis, 2.83 on the imaginary).
+RK4_STABILITY = 2.5
+#: Measured on the paper scene (benchmarks/convergence.py): relative error of the metrics
+#: ~ ERROR_CONSTANT (h w_fast)^4 with contact switches located.
+ERROR_CONSTANT = 2e-4
+#: Single-thread kernel speed used for run-time estimates in messages [steps/s].
+STEPS_PER_SECOND = 2.5e7
+#: Periods a run typically needs to settle, for run-time estimates in messages.
+TYPICAL_PERIODS = 150
+
+
+@dataclass(frozen=True)
+class TimeScales:
+    """Rates of one point. [rad/s] for oscillations, [1/s] for decays."""
+
+    forcing: float
+    natural: float
+    circuit: float
+    contact: float
+    contact_damping: float
+    impact_velocity: float  # estimate [m/s]
+    penetration: float  # estimate [m]
+
+    def fastest(self) -> tuple[float, str]:
+        """Largest rate and what it is, for stability."""
+        rates = {
+            "the natural frequency": self.natural,
+            "the forcing": self.forcing,
+            "the load circuit 1/(R C_p)": self.circuit,
+            f"the contact stiffness (linearised contact frequency {self.contact / 2 / math.pi:.3g} "
+            f"Hz at the expected penetration {self.penetration:.2g} m)": self.contact,
+            f"the contact damping (rate k_h delta^1.5 c_h / m at the expected penetration "
+            f"{self.penetration:.2g} m)": self.contact_damping,
+        }
+        what = max(rates, key=rates.get)
+        return rates[what], what
+
+
+def contact_damping_value(p: dict, impact_velocity: float) -> float:
+    """c_h [s/m] of a point: given, fixed-velocity law, or the law at ``impact_velocity``."""
+    if p["contact_damping"] is not None:
+        return p["contact_damping"]
+    velocity = p["impact_velocity"] if p["impact_velocity_mode"] == "fixed" else impact_velocity
+    return damping_factor(p["contact_law"], p["restitution"]) / velocity
+
+
+def time_scales(p: dict) -> TimeScales:
+    """Time scales of a validated parameter set (SI units)."""
+    m = p["mass"]
+    wn = 2 * math.pi * p["natural_frequency"]
+    w = 2 * math.pi * p["frequency"]
+    # At least 0.1 % damping in the estimate: an undamped resonance has no finite amplitude.
+    k, c = m * wn * wn, 2 * max(p["damping_ratio"], 1e-3) * m * wn
+
+    def velocity(omega):
+        electrical = (1j * omega * p["coupling"] ** 2 * p["resistance"]
+                      / (1 + 1j * omega * p["resistance"] * p["capacitance"]))
+        x = m * p["amplitude"] / (k - m * omega * omega + 1j * omega * c + electrical)
+        return abs(omega * x)
+
+    v = max(velocity(w), velocity(wn), 1e-12)
+    kh = p["hertz_stiffness"]
+    contact = damping = delta = 0.0
+    # The stop only takes energy out: the motion stays within the linear resonance amplitude.
+    reachable = p["gap"] < 2.0 * v / min(w, wn)
+    if kh > 0 and reachable:
+        ch = contact_damping_value(p, v)
+        delta = (5 * m * v * v / (4 * kh)) ** 0.4
+        if ch > 0:
+            delta = min(delta, (1.25 * m * v / (kh * ch)) ** 0.4)
+        delta += max(-p["gap"], 0.0)  # a preloaded stop is already pressed in
+        contact = math.sqrt(1.5 * kh * math.sqrt(delta) / m)
+        damping = kh * delta**1.5 * ch / m
+    return TimeScales(w, wn, 1 / (p["resistance"] * p["capacitance"]), contact, damping, v,
+                      delta)
+
+
+def auto_steps_per_period(p: dict) -> int:
+    """Steps per forcing period for the accuracy target ``p["accuracy"]``, within stability.
+
+    The step resolves the fastest oscillation (forcing, natural, contact) so that
+    ERROR_CONSTANT (h w)^4 <= accuracy, and keeps every rate at half RK4's stability bound.
+    At least 64 steps, rounded up to a multiple of 16.
+    """
+    s = time_scales(p)
+    oscillation = max(s.forcing, s.natural, s.contact)
+    h_accuracy = (p["accuracy"] / ERROR_CONSTANT) ** 0.25 / oscillation
+    h_stable = 0.5 * RK4_STABILITY / s.fastest()[0]
+    steps = math.ceil(1.0 / (p["frequency"] * min(h_accuracy, h_stable)))
+    return max(64, 16 * math.ceil(steps / 16))
+
+
+def stability_steps(p: dict) -> tuple[int, str]:
+    """Fewest steps per period inside RK4's stability bound, and the rate that sets it."""
+    rate, what = time_scales(p).fastest()
+    return math.ceil(rate / (p["frequency"] * RK4_STABILITY)), what
+
+
+def run_time_estimate(steps_per_period: int) -> float:
+    """Rough single-thread run time of one point [s]."""
+    return steps_per_period * TYPICAL_PERIODS / STEPS_PER_SECOND
