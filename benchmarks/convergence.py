@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_contact_reference import _reference_orbit  # noqa: E402
+from reference import reference_orbit  # noqa: E402
 
 from harvester_sweep import run_scene  # noqa: E402
 
 
 def main() -> None:
-    reference = _reference_orbit(run_scene("paper", steps_per_period=8192,
+    reference = reference_orbit(run_scene("paper", steps_per_period=8192,
                                            settle_tolerance=1e-12))
     print(f"paper scene, {platform.processor() or platform.machine()}, "
           f"python {platform.python_version()}\n")

@@ -97,8 +97,13 @@ def _scene(args) -> int:
         )
         return EXIT_DIVERGED
     if metrics["status"] == "not settled":
+        from .stepping import slowest_decay
+
+        rate, what = slowest_decay(result.parameters)
         print(f"harvester-sweep: warning: no steady state within max_periods = "
-              f"{result.parameters['max_periods']}; the metrics are over the last periods run",
+              f"{result.parameters['max_periods']} (slowest transient without the stop: {what}, "
+              f"{rate * 1 / result.parameters['frequency']:.3g} e-folds per period); the motion "
+              "may be chaotic or need more periods: the metrics are over the last 16 periods",
               file=sys.stderr)
     if args.output:
         result.to_netcdf(args.output)
@@ -124,7 +129,11 @@ def _run(args) -> int:
               f"{args.output}.partial/: run the same command with --resume to finish",
               file=sys.stderr)
         return EXIT_INTERRUPTED
-    counts = [int((ds["status"] == code).sum()) for code in range(3)]
+    counts = [int((ds["status"] == code).sum()) for code in range(4)]
+    if counts[3]:
+        print(f"harvester-sweep: warning: {counts[3]} of {ds['status'].size} points were too "
+              "stiff for max_steps_per_period (status = 3, not run; 'harvester-sweep scene' "
+              "with their parameters says what needs which step)", file=sys.stderr)
     if counts[2]:
         print(f"harvester-sweep: warning: {counts[2]} of {ds['status'].size} points diverged "
               "(status = 2, NaN metrics): raise steps_per_period", file=sys.stderr)

@@ -37,8 +37,8 @@ SERIES: dict[str, tuple[int, str, str]] = {
     "contact_force": (3, "N", "contact force of the stop F_c"),
 }
 
-STATUS_FLAGS = {"flag_values": np.array([0, 1, 2], dtype="i1"),
-                "flag_meanings": "settled not_settled diverged"}
+STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3], dtype="i1"),
+                "flag_meanings": "settled not_settled diverged too_stiff"}
 
 
 def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Dataset:
@@ -65,7 +65,7 @@ def scene_dataset(result, series: xr.Dataset) -> xr.Dataset:
         if name == "approach_velocity":
             attrs["comment"] = "NaN when the orbit has no impact (impacts_per_period = 0)"
         ds[name] = ((), np.nan if value is None else float(value), attrs)
-    code = ["settled", "not settled", "diverged"].index(result.metrics["status"])
+    code = ["settled", "not settled", "diverged", "too stiff"].index(result.metrics["status"])
     ds["status"] = ((), np.int8(code), {"units": "1", "long_name": "outcome of the run",
                                         **STATUS_FLAGS})
     ds.attrs.update(run_attributes(result.parameters, result.notes))

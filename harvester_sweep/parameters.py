@@ -18,6 +18,11 @@ class ParameterError(ValueError):
     """A parameter is unknown, of the wrong type or out of its allowed range."""
 
 
+class TooStiffError(ParameterError):
+    """The automatic step of a point would exceed max_steps_per_period (a sweep flags the
+    point with status ``too_stiff`` and goes on)."""
+
+
 @dataclass(frozen=True)
 class Parameter:
     """One model or run parameter.
@@ -149,8 +154,9 @@ PARAMETERS: dict[str, Parameter] = {
            "steps_per_period when it is not given", low=1e-13, high=1e-2),
         _P("max_steps_per_period", "1", "most steps per period the automatic choice may take; "
            "a point that needs more is refused as too stiff", kind="int", low=16, high=1e9),
-        _P("max_periods", "1", "budget of forcing periods to reach steady state", kind="int",
-           low=1, high=1e8),
+        _P("max_periods", "1", "budget of forcing periods to reach steady state (unset: from "
+           "the slowest decay rate and settle_tolerance)", kind="int", low=1, high=1e8,
+           optional=True),
         _P(
             "settle_tolerance",
             "1",
@@ -184,7 +190,7 @@ _TABLE_1 = dict(
     steps_per_period=None,
     accuracy=1e-7,
     max_steps_per_period=2_000_000,
-    max_periods=10000,
+    max_periods=None,
     settle_tolerance=1e-10,
     locate_switches=True,
 )
@@ -263,11 +269,13 @@ def _check_step(p: dict) -> None:
     """
     from . import stepping
 
+    if p["max_periods"] is None:
+        p["max_periods"] = stepping.auto_max_periods(p)
     if p["steps_per_period"] is None:
         steps = stepping.auto_steps_per_period(p)
         if steps > p["max_steps_per_period"]:
             rate, what = stepping.time_scales(p).fastest()
-            raise ParameterError(
+            raise TooStiffError(
                 f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
                 f"{1 / (p['frequency'] * steps):.3g} s, {steps} steps per period, about "
                 f"{stepping.run_time_estimate(steps):.0f} s per point; raise "
@@ -296,10 +304,11 @@ def _check_step(p: dict) -> None:
         )
     needed, what = stepping.stability_steps(p)
     if p["steps_per_period"] < needed:
+        limit = 1.0 / (p["frequency"] * needed)
         warnings.warn(
             f"steps_per_period = {p['steps_per_period']}: the step {step:.3g} s is beyond the "
-            f"estimated RK4 stability bound {bound}/rate = {step * p['steps_per_period'] / needed:.3g} s "
-            f"of {what}; the run may diverge: use >= {needed} or leave steps_per_period unset",
+            f"estimated RK4 stability bound {bound}/rate = {limit:.3g} s of {what}; the run "
+            f"may diverge: use >= {needed} or leave steps_per_period unset",
             StabilityWarning,
             stacklevel=4,
         )

@@ -118,3 +118,30 @@ def stability_steps(p: dict) -> tuple[int, str]:
 def run_time_estimate(steps_per_period: int) -> float:
     """Rough single-thread run time of one point [s]."""
     return steps_per_period * TYPICAL_PERIODS / STEPS_PER_SECOND
+
+
+def slowest_decay(p: dict) -> tuple[float, str]:
+    """Slowest decay rate of a transient without the stop [1/s], and what it is.
+
+    The mechanical mode decays at zeta w_n plus what the load takes, c_e / (2 m) with
+    c_e = theta^2 R / (1 + (w_n R C_p)^2); the load circuit at 1 / (R C_p). The stop only
+    adds damping, so this bounds the settling time from above.
+    """
+    m = p["mass"]
+    wn = 2 * math.pi * p["natural_frequency"]
+    tau = p["resistance"] * p["capacitance"]
+    electrical = p["coupling"] ** 2 * p["resistance"] / (1 + (wn * tau) ** 2) / (2 * m)
+    rates = {"the mechanical damping": p["damping_ratio"] * wn + electrical,
+             f"the load circuit (R C_p = {tau:.3g} s)": 1 / tau}
+    what = min(rates, key=rates.get)
+    return rates[what], what
+
+
+def auto_max_periods(p: dict) -> int:
+    """Budget of forcing periods: the slowest transient decays by the settle tolerance, with
+    a margin; at least 1000 and at most 1e6."""
+    rate, _ = slowest_decay(p)
+    if rate <= 0:
+        return 1_000_000
+    needed = 1.5 * math.log(1 / p["settle_tolerance"]) * p["frequency"] / rate + 100
+    return int(min(max(needed, 1000), 1_000_000))

@@ -20,13 +20,21 @@ import os
 import shutil
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from . import kernel
-from .parameters import PARAMETERS, PRESET_NOTES, ParameterError
+from .parameters import (
+    PARAMETERS,
+    PRESET_NOTES,
+    ParameterError,
+    StabilityWarning,
+    TooStiffError,
+    resolve_parameters,
+)
 from .sweep_file import SweepSpec, load_sweep
 
 _INTEGER_METRICS = ("orbit_period", "periods_run")
@@ -121,6 +129,7 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     rows = np.empty((length, n, kernel.NP))
     rest = np.empty((n, 4))
     reverse = np.zeros(n, dtype=bool)
+    refused = np.zeros((length, n), dtype=bool)
     for i, line in enumerate(lines):
         index = np.unravel_index(line, spec.line_shape)
         if spec.continuation:
@@ -131,7 +140,17 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
             if spec.continuation:
                 j = length - 1 - step if reverse[i] else step
                 values["frequency"] = spec.grid["frequency"][j].item()
-            point = spec.point_parameters(values)
+            try:
+                point = spec.point_parameters(values)
+            except TooStiffError:
+                # Refused before integration: a row that runs no period, flagged below.
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", StabilityWarning)
+                    point = resolve_parameters(spec.preset, **{**spec.fixed, **values,
+                                                               "steps_per_period": 64,
+                                                               "max_periods": 1})
+                point["max_periods"] = 0
+                refused[step, i] = True
             rows[step, i] = kernel.pack_parameters(point)
         rest[i] = kernel.initial_state(point)  # impact_velocity is constant along a line
     # numba gives each thread one contiguous block of a prange; neighbouring lines cost alike
@@ -139,7 +158,7 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     # turn to balance the blocks. Lines are independent: the results do not change.
     turns = numba.get_num_threads()
     deal = np.concatenate([np.arange(k, n, turns) for k in range(turns)])
-    rows, rest = rows[:, deal], rest[deal]
+    rows, rest, refused = rows[:, deal], rest[deal], refused[:, deal]
 
     kernel.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
@@ -148,6 +167,10 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     strobes = np.empty((length, n, spec.samples, 3))
     for step in range(length):
         kernel.run_points(rows[step], states, metrics[step], strobes[step])
+        metrics[step, refused[step]] = np.nan
+        metrics[step, refused[step], kernel.M_STATUS] = kernel.TOO_STIFF
+        metrics[step, refused[step], kernel.M_PERIODS] = 0
+        metrics[step, refused[step], kernel.M_ORBIT] = 0
         # A diverged state would poison the rest of its line: continue it from rest.
         diverged = metrics[step, :, kernel.M_STATUS] == kernel.DIVERGED
         states[diverged] = rest[diverged]

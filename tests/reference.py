@@ -39,7 +39,7 @@ class Reference:
     the mechanical damping, the contact force and the load, each in J.
     """
 
-    def __init__(self, p, rtol=1e-12, atol_scale=1e-14):
+    def __init__(self, p, rtol=1e-12, atol_scale=1e-14, method="DOP853"):
         self.p = p
         wn = 2 * math.pi * p["natural_frequency"]
         self.m = p["mass"]
@@ -49,6 +49,7 @@ class Reference:
         self.ch = (p["contact_damping"] if p.get("contact_damping") is not None
                    else lankarani_nikravesh_damping(p["restitution"], p["impact_velocity"]))
         self.rtol = rtol
+        self.method = method
         self.atol_scale = atol_scale
         self.onset_velocities = []
 
@@ -72,7 +73,8 @@ class Reference:
         """State (x, v, V) and quadratures at t1 from (x, v, V) at t0; optionally the pieces."""
         p = self.p
         y = np.concatenate([np.asarray(y0, float)[:3], np.zeros(5)])
-        scale = np.array([abs(p["gap"]) + 1e-6, 1e-3, 1e-3, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9])
+        scale = np.array([abs(p["gap"]) + 1e-6, 1e-3, 1e-3 * max(p["coupling"] / 4e-7, 1e-3),
+                          1e-9, 1e-9, 1e-9, 1e-9, 1e-9])
         atol = self.atol_scale * scale
         t = t0
         pieces = []
@@ -83,7 +85,7 @@ class Reference:
 
             switch.terminal = True
             switch.direction = -1.0 if in_contact else 1.0
-            sol = solve_ivp(self.rhs, (t, t1), y, method="DOP853", rtol=self.rtol, atol=atol,
+            sol = solve_ivp(self.rhs, (t, t1), y, method=self.method, rtol=self.rtol, atol=atol,
                             events=switch, args=(in_contact,), dense_output=dense)
             if dense:
                 pieces.append((sol, in_contact))
@@ -95,3 +97,32 @@ class Reference:
             else:
                 t, y = t1, sol.y[:, -1]
         return y, pieces
+
+
+def reference_orbit(result, periods_to_settle=40, method="DOP853", rtol=1e-12):
+    """Settle the reference from the engine's state, then measure one period densely."""
+    p = result.parameters
+    T = 1.0 / p["frequency"]
+    ref = Reference(p, rtol=rtol, method=method)
+    y, _ = ref.integrate(result.state, 0.0, periods_to_settle * T)
+    start = y[:3].copy()
+    ref.onset_velocities.clear()
+    end, pieces = ref.integrate(start, 0.0, T, dense=True)
+    t = np.linspace(0.0, T, 40001)
+    samples = np.full((3, t.size), np.nan)
+    for sol, _ in pieces:
+        inside = (t >= sol.t[0]) & (t <= sol.t[-1])
+        samples[:, inside] = sol.sol(t[inside])[:3]
+    force = np.array([ref.contact_force(x, v) for x, v in samples[:2].T])
+    return {
+        "start": start,
+        "end": end[:3],
+        "v_rms": math.sqrt(end[3] / T),
+        "power": end[3] / T / p["resistance"],
+        "v_peak": np.abs(samples[2]).max(),
+        "x_max": samples[0].max(),
+        "x_min": samples[0].min(),
+        "contact_force_max": force.max(),
+        "approach_velocity": float(np.mean(ref.onset_velocities)),
+        "impacts_per_period": len(ref.onset_velocities),
+    }

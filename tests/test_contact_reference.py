@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from reference import Reference
+from reference import reference_orbit
 from scipy.integrate import simpson
 
 from harvester_sweep import run_scene
@@ -17,35 +17,6 @@ SCENES = {
 }
 
 
-def _reference_orbit(result, periods_to_settle=40):
-    """Settle the reference from the engine's state, then measure one period densely."""
-    p = result.parameters
-    T = 1.0 / p["frequency"]
-    ref = Reference(p)
-    y, _ = ref.integrate(result.state, 0.0, periods_to_settle * T)
-    start = y[:3].copy()
-    ref.onset_velocities.clear()
-    end, pieces = ref.integrate(start, 0.0, T, dense=True)
-    t = np.linspace(0.0, T, 40001)
-    samples = np.full((3, t.size), np.nan)
-    for sol, _ in pieces:
-        inside = (t >= sol.t[0]) & (t <= sol.t[-1])
-        samples[:, inside] = sol.sol(t[inside])[:3]
-    force = np.array([ref.contact_force(x, v) for x, v in samples[:2].T])
-    return {
-        "start": start,
-        "end": end[:3],
-        "v_rms": math.sqrt(end[3] / T),
-        "power": end[3] / T / p["resistance"],
-        "v_peak": np.abs(samples[2]).max(),
-        "x_max": samples[0].max(),
-        "x_min": samples[0].min(),
-        "contact_force_max": force.max(),
-        "approach_velocity": float(np.mean(ref.onset_velocities)),
-        "impacts_per_period": len(ref.onset_velocities),
-    }
-
-
 @pytest.fixture(scope="module")
 def reference_orbits():
     """The SciPy steady orbit of each scene, settled from a fine engine run."""
@@ -54,7 +25,7 @@ def reference_orbits():
         kwargs = dict(kwargs)
         fine = run_scene(kwargs.pop("preset"), steps_per_period=8192, settle_tolerance=1e-12,
                          **kwargs)
-        orbits[scene] = _reference_orbit(fine)
+        orbits[scene] = reference_orbit(fine)
     return orbits
 
 
