@@ -98,7 +98,7 @@ def test_every_variable_has_cf_units_and_the_file_holds_the_run(tmp_path):
         assert ds["resistance"].attrs["grid_spacing"] == "log"
         assert ds["status"].dtype == np.int8
         assert ds["status"].attrs["flag_meanings"] == "settled not_settled diverged too_stiff"
-        assert list(ds["status"].attrs["flag_values"]) == [0, 1, 2]
+        assert list(ds["status"].attrs["flag_values"]) == [0, 1, 2, 3]
         assert ds["power"].dims == ("direction", "frequency", "resistance")
         assert ds["strobe_voltage"].dims == ("direction", "frequency", "resistance", "sample")
         # Fixed parameters, not the swept ones, are global attributes.
