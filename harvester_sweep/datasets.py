@@ -25,6 +25,8 @@ METRICS: dict[str, tuple[str, str]] = {
     "orbit_period": ("1", "forcing periods per orbit (0 when not settled)"),
     "converged": ("1", "steady state reached within the budget of periods (1) or not (0)"),
     "periods_run": ("1", "forcing periods integrated"),
+    "error_estimate": ("1", "estimated relative error of power, v_peak, x_max and x_min: their "
+                       "change when the run is repeated at twice the steps per period"),
     "steps_per_period": ("1", "RK4 steps per forcing period"),
     "run_time": ("s", "wall-clock integration time"),
 }
@@ -64,6 +66,8 @@ def scene_dataset(result, series: xr.Dataset) -> xr.Dataset:
         attrs = {"units": units, "long_name": long}
         if name == "approach_velocity":
             attrs["comment"] = "NaN when the orbit has no impact (impacts_per_period = 0)"
+        if name == "error_estimate":
+            attrs["comment"] = "NaN when the point did not settle"
         ds[name] = ((), np.nan if value is None else float(value), attrs)
     code = ["settled", "not settled", "diverged", "too stiff"].index(result.metrics["status"])
     ds["status"] = ((), np.int8(code), {"units": "1", "long_name": "outcome of the run",

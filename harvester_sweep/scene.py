@@ -10,6 +10,7 @@ import numpy as np
 
 from . import kernel
 from .parameters import PRESET_NOTES, resolve_parameters
+from .stepping import halved, halving_error
 
 
 @dataclass
@@ -23,7 +24,8 @@ class SceneResult:
     metrics : dict
         Metric name -> value (see ``datasets.METRICS`` for units); ``status`` is one of
         ``"settled"``, ``"not settled"``, ``"diverged"``; ``approach_velocity`` is None when
-        the orbit has no impact.
+        the orbit has no impact; ``error_estimate`` (step halving, see
+        ``stepping.halving_error``) is None when the point did not settle.
     state : numpy.ndarray
         State ``(x [m], v [m/s], V [V], v_imp [m/s])`` at the last period boundary.
     notes : list of str
@@ -107,12 +109,19 @@ def run_scene(preset: str | None = "paper", **parameters) -> SceneResult:
     start = time.perf_counter()
     kernel.run_points(row[None, :], state[None, :], metrics[None, :], np.empty((1, 0, 3)))
     run_time = time.perf_counter() - start
-    return SceneResult(values, _metrics_dict(metrics, values, run_time), state,
-                       PRESET_NOTES.get(preset or "paper", []))
+    error = np.nan
+    if metrics[kernel.M_STATUS] == kernel.SETTLED:  # step halving, from the settled state
+        fine = np.empty(kernel.NM)
+        kernel.run_points(kernel.pack_parameters(halved(values))[None, :], state[None, :].copy(),
+                          fine[None, :], np.empty((1, 0, 3)))
+        error = halving_error(metrics, fine)
+    out = _metrics_dict(metrics, values, run_time, error)
+    return SceneResult(values, out, state, PRESET_NOTES.get(preset or "paper", []))
 
 
-def _metrics_dict(metrics: np.ndarray, values: dict, run_time: float) -> dict:
+def _metrics_dict(metrics: np.ndarray, values: dict, run_time: float, error) -> dict:
     out = {name: float(metrics[i]) for i, name in enumerate(kernel.METRIC_NAMES)}
+    out["error_estimate"] = float(error)
     status = int(out["status"])
     out["status"] = kernel.STATUS_NAMES[status]
     out["converged"] = status == kernel.SETTLED

@@ -35,6 +35,7 @@ from .parameters import (
     TooStiffError,
     resolve_parameters,
 )
+from .stepping import halving_error
 from .sweep_file import SweepSpec, load_sweep
 
 _INTEGER_METRICS = ("orbit_period", "periods_run")
@@ -158,15 +159,21 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     # turn to balance the blocks. Lines are independent: the results do not change.
     turns = numba.get_num_threads()
     deal = np.concatenate([np.arange(k, n, turns) for k in range(turns)])
+    position = np.where(reverse[None, :], length - 1 - np.arange(length)[:, None],
+                        np.arange(length)[:, None])
+    estimated = spec.estimated(np.asarray(lines)[None, :] * length + position) & ~refused
     rows, rest, refused = rows[:, deal], rest[deal], refused[:, deal]
+    estimated = estimated[:, deal]
 
     kernel.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
     states = rest.copy()
     metrics = np.empty((length, n, kernel.NM))
     strobes = np.empty((length, n, spec.samples, 3))
+    finals = np.empty((length, n, 4))
     for step in range(length):
         kernel.run_points(rows[step], states, metrics[step], strobes[step])
+        finals[step] = states
         metrics[step, refused[step]] = np.nan
         metrics[step, refused[step], kernel.M_STATUS] = kernel.TOO_STIFF
         metrics[step, refused[step], kernel.M_PERIODS] = 0
@@ -177,15 +184,33 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
         if on_step is not None:
             on_step(n)
     run_time = time.perf_counter() - start
+    errors = _halving_errors(rows, finals, metrics, estimated)
 
     undo = np.argsort(deal)
     metrics, strobes = metrics[:, undo].swapaxes(0, 1), strobes[:, undo].swapaxes(0, 1)
+    errors = errors[:, undo].swapaxes(0, 1)
     metrics[reverse] = metrics[reverse, ::-1]  # down lines ran from the highest frequency
     strobes[reverse] = strobes[reverse, ::-1]
+    errors[reverse] = errors[reverse, ::-1]
     columns = [kernel.METRIC_NAMES.index(name) for name in spec.metrics]
     return {"metrics": np.ascontiguousarray(metrics[..., columns]),
             "strobe": np.ascontiguousarray(strobes[..., [0, 2]]),
+            "error_estimate": np.ascontiguousarray(errors),
             "run_time": np.float64(run_time)}
+
+
+def _halving_errors(rows, finals, metrics, estimated) -> np.ndarray:
+    """Step-halving error estimates [-] of the ``estimated`` points, NaN elsewhere: each is
+    rerun at twice the steps per period from its own final state (all in one kernel call)."""
+    errors = np.full(estimated.shape, np.nan)
+    if estimated.any():
+        halved = rows[estimated].copy()
+        halved[:, kernel.P_N] *= 2
+        fine = np.empty((len(halved), kernel.NM))
+        kernel.run_points(halved, finals[estimated].copy(), fine,
+                          np.empty((len(halved), 0, 3)))
+        errors[estimated] = halving_error(metrics[estimated], fine)
+    return errors
 
 
 def sweep_dataset(spec: SweepSpec, chunks: list):
@@ -225,6 +250,12 @@ def sweep_dataset(spec: SweepSpec, chunks: list):
             extra = {"comment": "NaN when the orbit has no impact"} \
                 if name == "approach_velocity" else {}
             data[name] = variable(values, *METRICS[name], **extra)
+    if spec.error_estimate != "none":
+        errors = np.concatenate([c["error_estimate"] for c in chunks])
+        data["error_estimate"] = variable(
+            errors, *METRICS["error_estimate"],
+            comment=f"points estimated: {spec.error_estimate}; NaN where not estimated or "
+                    "not settled")
     if spec.samples:
         for col, name, units, what in ((0, "strobe_displacement", "m", "tip displacement x"),
                                        (1, "strobe_voltage", "V", "voltage across the load V")):

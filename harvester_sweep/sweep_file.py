@@ -13,6 +13,7 @@ A sweep file::
     outputs = ["power", "x_max", "strobe"]
     samples = 64                  # stroboscopic samples kept per point when "strobe" is asked
     chunk_size = 4096             # points per chunk file (rounded to whole frequency lines)
+    error_estimate = "sample"     # step-halving error estimate on ~64 points, "all" or "none"
 
 Everything is checked before any integration; a bad entry raises :class:`ParameterError`
 naming its key.
@@ -49,7 +50,9 @@ DEFAULT_SAMPLES = 32
 DEFAULT_CHUNK_SIZE = 4096
 
 _TOP_KEYS = ("preset", "parameters", "grid", "sweep")
-_SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size")
+_SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size", "error_estimate")
+ERROR_ESTIMATES = ("sample", "all", "none")
+ERROR_SAMPLE_POINTS = 64  # points given an error estimate by default
 _RANGE_KEYS = ("start", "stop", "num", "scale")
 
 
@@ -76,6 +79,9 @@ class SweepSpec:
         Stroboscopic samples stored per point, 0 when "strobe" is not asked.
     chunk_size : int
         Points per chunk, before rounding to whole frequency lines.
+    error_estimate : str
+        Which points get a step-halving error estimate: ``"sample"`` (about
+        ERROR_SAMPLE_POINTS spread over the grid), ``"all"`` or ``"none"``.
     """
 
     preset: str
@@ -86,6 +92,7 @@ class SweepSpec:
     metrics: tuple
     samples: int
     chunk_size: int
+    error_estimate: str = "sample"
 
     @property
     def continuation(self) -> bool:
@@ -124,6 +131,15 @@ class SweepSpec:
     def n_chunks(self) -> int:
         return -(-self.n_lines // self.lines_per_chunk)
 
+    def estimated(self, flat_index: np.ndarray) -> np.ndarray:
+        """Which points (by index line * line_length + position along the line) get an
+        error estimate: a fixed stride over the grid, whatever the chunking."""
+        if self.error_estimate == "none":
+            return np.zeros(np.shape(flat_index), dtype=bool)
+        stride = 1 if self.error_estimate == "all" else max(
+            1, self.n_points // ERROR_SAMPLE_POINTS)
+        return np.asarray(flat_index) % stride == 0
+
     def point_parameters(self, values: dict) -> dict:
         """Validated parameters of one point from its grid ``values`` (SI units)."""
         return resolve_parameters(self.preset, **self.fixed, **values)
@@ -145,6 +161,7 @@ class SweepSpec:
                 "metrics": list(self.metrics),
                 "samples": self.samples,
                 "chunk_size": self.chunk_size,
+                "error_estimate": self.error_estimate,
             },
             sort_keys=True,
         )
@@ -199,8 +216,12 @@ def load_sweep(source) -> SweepSpec:
     elif "samples" in options:
         raise ParameterError('sweep.samples: stroboscopic samples need "strobe" in sweep.outputs')
     metrics = tuple(n for n in METRIC_OUTPUTS if n in outputs or (samples and n == "orbit_period"))
+    error_estimate = options.get("error_estimate", "sample")
+    if error_estimate not in ERROR_ESTIMATES:
+        raise ParameterError(f"sweep.error_estimate = {error_estimate!r}: must be one of "
+                             + ", ".join(f'"{e}"' for e in ERROR_ESTIMATES))
     spec = SweepSpec(preset, fixed, grid, spacing, directions, metrics + ALWAYS_STORED, samples,
-                     _integer(options, "chunk_size", DEFAULT_CHUNK_SIZE))
+                     _integer(options, "chunk_size", DEFAULT_CHUNK_SIZE), error_estimate)
     _check_corners(spec)
     if samples:
         budget = int(grid["max_periods"].min()) if "max_periods" in grid else base["max_periods"]

@@ -93,3 +93,17 @@ def test_paper_approach_velocity_close_to_published():
     # The paper reports 1.76e-3 m/s "obtained through the simulations".
     assert result.metrics["approach_velocity"] == pytest.approx(1.76e-3, rel=0.05)
     assert result.metrics["impacts_per_period"] == 1.0
+
+
+@pytest.mark.parametrize("steps", [384, 768])
+def test_error_estimate_tracks_the_true_error(steps, reference_orbits):
+    """Step halving estimates the error against SciPy within a factor of a few."""
+    result = run_scene("paper", steps_per_period=steps, settle_tolerance=1e-13)
+    ref = reference_orbits["paper"]
+    amplitude = 0.5 * (ref["x_max"] - ref["x_min"])
+    true = max(abs(result.metrics["power"] / ref["power"] - 1),
+               abs(result.metrics["v_peak"] / ref["v_peak"] - 1),
+               abs(result.metrics["x_max"] - ref["x_max"]) / amplitude,
+               abs(result.metrics["x_min"] - ref["x_min"]) / amplitude)
+    assert true > 1e-7  # well above the reference's own error
+    assert 1 / 3 < result.metrics["error_estimate"] / true < 3

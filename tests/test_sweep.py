@@ -113,14 +113,15 @@ def test_every_variable_has_cf_units_and_the_file_holds_the_run(tmp_path):
 def test_outputs_select_what_is_computed_and_stored():
     grid = {"frequency": [140.0, 150.0]}
     ds = run_sweep(spec(grid, outputs=["power"]), progress=False)
-    assert set(ds.data_vars) == {"power", "status", "periods_run"}
+    # error_estimate: on a sample of points unless sweep.error_estimate = "none"
+    assert set(ds.data_vars) == {"power", "status", "periods_run", "error_estimate"}
     assert "sample" not in ds.dims
     chunk = sweep.compute_chunk(load_sweep(spec(grid, outputs=["power"])), 0)
     assert chunk["strobe"].shape[2] == 0  # the kernel got S = 0: no strobe buffers
 
     ds = run_sweep(spec(grid, outputs=["x_max", "strobe"], samples=5), progress=False)
     assert set(ds.data_vars) == {"x_max", "orbit_period", "status", "periods_run",
-                                 "strobe_displacement", "strobe_voltage"}
+                                 "strobe_displacement", "strobe_voltage", "error_estimate"}
     assert ds.sizes["sample"] == 5 and list(ds["sample"].values) == [-4, -3, -2, -1, 0]
     # Settled period-1 orbits: every stroboscopic sample is the same point y(nT).
     assert (ds["orbit_period"] == 1).all()
@@ -314,3 +315,23 @@ def test_example_sweep_file_is_valid():
     loaded = load_sweep(example)
     assert loaded.directions == ("up", "down") and loaded.fixed["gap"] == 1e-6
     assert loaded.grid["frequency"][[0, -1]].tolist() == [100.0, 300.0]
+
+
+def test_error_estimate_on_a_sample_or_every_point_whatever_the_chunking():
+    spec = {"preset": "paper", "grid": {"frequency": {"start": 120, "stop": 160, "num": 9},
+                                         "gap": [1e-6, 3e-6]},
+             "sweep": {"directions": ["up"], "outputs": ["power"]}}
+    every = sweep.run_sweep({**spec, "sweep": {**spec["sweep"], "error_estimate": "all",
+                                          "chunk_size": 9}}, progress=False)
+    sampled = sweep.run_sweep(spec, progress=False)
+    none = sweep.run_sweep({**spec, "sweep": {**spec["sweep"], "error_estimate": "none"}},
+                     progress=False)
+    assert "error_estimate" not in none
+    assert every.error_estimate.attrs["units"] == "1"
+    settled = every.status.values == 0
+    assert np.all(np.isfinite(every.error_estimate.values[settled]))
+    assert np.all(every.error_estimate.values[settled] < 1e-5)
+    known = np.isfinite(sampled.error_estimate.values)
+    assert 0 < known.sum() <= sampled.status.size
+    np.testing.assert_array_equal(sampled.error_estimate.values[known],
+                                  every.error_estimate.values[known])
