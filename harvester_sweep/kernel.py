@@ -379,7 +379,7 @@ def run_point(p, y, metrics, strobe, series, settle):
                 # (t - t_0)^1.5 force: quarter steps there.
                 xn, vn, Vn, dq = _rk4_pieces(x, v, V, 0.0, 1.0, _EQUAL, False, k, n_steps, h,
                                              A, wn2, cm, thm, on * khm, g, ch, irc, thc)
-                fine -= 1
+                fine = max(fine - 1, 0)
             q += dq
             dVn = -irc * Vn - thc * vn
 
