@@ -1,8 +1,10 @@
-"""The fixed-step RK4 kernel: integrates the switched Hertz system to steady state.
+"""The fixed-step RK4 kernel of one point: the switched Hertz system, its RK4 steps with
+contact switches located inside the step, and steady-state detection.
 
 Kernels are plain Numba functions on float arrays (no Python objects); everything
 user-facing lives in :mod:`harvester_sweep.scene`. One point's parameters are a row of
 ``NP`` floats laid out by the ``P_*`` indices below, built by :func:`pack_parameters`.
+:mod:`harvester_sweep.lanes` steps many points at once with these functions.
 
 State per point: ``(x, v, V, v_imp)``: displacement [m], velocity [m/s], voltage [V] and
 the approach velocity [m/s] latched at the last first touch (used by the latched laws).
@@ -16,10 +18,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-# fastmath without nnan/ninf: the divergence check relies on isfinite.
-FASTMATH = {"contract", "arcp", "afn", "reassoc", "nsz"}
+# Bit-for-bit reproducible whichever instructions (vector lanes or scalar) run a point:
+# no FMA contraction, no reassociation, no approximate functions. No nnan/ninf either:
+# the divergence check relies on isfinite.
+FASTMATH = {"nsz", "arcp"}
 _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 # Layout of a parameter row.
@@ -280,159 +284,6 @@ def _switch_step(x, v, V, a0, xn, vn, Vn, on, k, n_steps, h, A, wn2, cm, thm, kh
 
 
 @njit(**_JIT)
-def run_point(p, y, metrics, strobe, series, settle):
-    """Integrate one point from state ``y`` (updated in place) with fixed-step RK4.
-
-    Parameters
-    ----------
-    p : float64[NP]
-        Parameter row (see :func:`pack_parameters`).
-    y : float64[4]
-        State ``(x, v, V, v_imp)``; on return, the state at the last period boundary.
-    metrics : float64[NM]
-        Output: the metrics of ``METRIC_NAMES``, over the orbit once settled (over the
-        last MAX_ORBIT_PERIOD periods when not settled; NaN when diverged).
-    strobe : float64[S, 3]
-        Output: stroboscopic samples (x, v, V) at the last S period boundaries (S may be 0).
-    series : float64[L, 4]
-        Output: (x, v, V, F_c) at every step boundary from the start (L may be 0).
-    settle : bool
-        Stop at steady state (True) or run exactly the budget of periods (False).
-    """
-    A, wn2, cm, thm, khm = p[P_A], p[P_WN2], p[P_CM], p[P_THM], p[P_KHM]
-    m, g, irc, thc = p[P_M], p[P_G], p[P_IRC], p[P_THC]
-    latch = p[P_LATCH]
-    n_steps = int(p[P_N])
-    max_periods = int(p[P_MAXP])
-    tol, xlim = p[P_TOL], p[P_XLIM]
-    h = p[P_T] / n_steps
-    kh = khm * m
-    locate = p[P_LOCATE]
-
-    # m A sin(w t) / m at the half steps of one period: sine[j] = A sin(pi j / n_steps).
-    sine = np.empty(2 * n_steps + 1)
-    for j in range(2 * n_steps + 1):
-        sine[j] = A * math.sin(math.pi * j / n_steps)
-
-    n_strobe = strobe.shape[0]
-    n_series = series.shape[0]
-    ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
-    ring = np.empty((ring_len, 3))
-    acc = np.zeros((MAX_ORBIT_PERIOD, _NA))
-    gaps = np.full((_GAP_HISTORY, MAX_ORBIT_PERIOD + 1), np.inf)
-
-    x, v, V, vimp = y[0], y[1], y[2], y[3]
-    ch = latch / vimp if latch > 0.0 else p[P_CH]
-    # Contact state: 1.0 when the force acts. Without location it is always on and the
-    # force switches itself off through max(x - g, 0) and max(1 + c_h v, 0) mid-step.
-    on = 1.0 if locate == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
-    fine = 0  # steps left to take in quarter steps after a touch
-    ring[0, 0], ring[0, 1], ring[0, 2] = x, v, V
-    status, orbit, n = NOT_SETTLED, 0, 0
-    while n < max_periods:
-        q = 0.0
-        xmax, xmin, vmax, vpk = x, x, abs(v), abs(V)
-        d = max(x - g, 0.0)
-        fc = on * kh * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
-        fc_prev, fcmax, n_imp, sum_vimp = fc, fc, 0.0, 0.0
-        dV = -irc * V - thc * v
-        for k in range(n_steps):
-            j = n * n_steps + k
-            if j < n_series:
-                series[j, 0], series[j, 1], series[j, 2], series[j, 3] = x, v, V, fc
-            if latch > 0.0 and locate == 0.0 and x <= g and v > 0.0:
-                ch = latch / v  # predicted approach velocity, refined at first touch below
-            s0, s2 = sine[2 * k], sine[2 * k + 2]
-            xn, vn, Vn, dq, a0 = _rk4(x, v, V, h, s0, sine[2 * k + 1], s2,
-                                      wn2, cm, thm, on * khm, g, ch, irc, thc)
-            if locate == 0.0:
-                if x <= g < xn:  # first touch, on the cubic Hermite interpolant
-                    v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
-                    n_imp += 1.0
-                    sum_vimp += v_on
-                    if latch > 0.0 and v_on > 0.0:
-                        vimp = v_on
-                        ch = latch / v_on
-            elif (xn > g and 1.0 + ch * vn > 0.0) != (on == 1.0):
-                kind, theta = _switch_step(x, v, V, a0, xn, vn, Vn, on, k, n_steps, h, A, wn2,
-                                           cm, thm, khm, g, ch, irc, thc)
-                # Up to the switch with the old contact state (graded towards a separation)...
-                xe, ve, Ve, q1 = _rk4_pieces(
-                    x, v, V, 0.0, theta, _GRADED if on == 1.0 and kind == 1 else _WHOLE,
-                    True, k, n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
-                onset = on == 0.0 and kind == 1
-                if onset:
-                    n_imp += 1.0
-                    sum_vimp += ve
-                    if latch > 0.0 and ve > 0.0:
-                        vimp = ve
-                        ch = latch / ve
-                on = 1.0 - on
-                # ... and after it with the new one (graded from a touch).
-                xn, vn, Vn, q2 = _rk4_pieces(
-                    xe, ve, Ve, theta, 1.0 - theta, _GRADED if onset else _WHOLE, False,
-                    k, n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
-                dq = q1 + q2
-                fine = 3 if onset else 0
-            elif fine > 0 or (on == 1.0 and v < 0.0 and x - g < -3.0 * h * v):
-                # The steps just after a touch or before a separation still see the
-                # (t - t_0)^1.5 force: quarter steps there.
-                xn, vn, Vn, dq = _rk4_pieces(x, v, V, 0.0, 1.0, _EQUAL, False, k, n_steps, h,
-                                             A, wn2, cm, thm, on * khm, g, ch, irc, thc)
-                fine = max(fine - 1, 0)
-            q += dq
-            dVn = -irc * Vn - thc * vn
-
-            if v > 0.0 >= vn or v < 0.0 <= vn:
-                xe = _hermite_extremum(x, v, xn, vn, h)
-                xmax, xmin = max(xmax, xe), min(xmin, xe)
-            if (dV > 0.0) != (dVn > 0.0):
-                vpk = max(vpk, abs(_hermite_extremum(V, dV, Vn, dVn, h)))
-            d = max(xn - g, 0.0)
-            fcn = on * kh * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
-            if fc_prev > 0.0 and fc >= fc_prev and fc > fcn:  # parabola through the peak
-                a = 0.5 * (fc_prev + fcn) - fc
-                b = 0.5 * (fcn - fc_prev)
-                fcmax = max(fcmax, fc - b * b / (4.0 * a))
-
-            x, v, V, dV, fc_prev, fc = xn, vn, Vn, dVn, fc, fcn
-            xmax, xmin = max(xmax, x), min(xmin, x)
-            vmax, vpk, fcmax = max(vmax, abs(v)), max(vpk, abs(V)), max(fcmax, fc)
-        n += 1
-        if not (math.isfinite(x + v + V + q) and abs(x) <= xlim):
-            status = DIVERGED
-            break
-        slot = (n - 1) % MAX_ORBIT_PERIOD
-        acc[slot, _A_Q], acc[slot, _A_XMAX], acc[slot, _A_XMIN] = q, xmax, xmin
-        acc[slot, _A_VMAX], acc[slot, _A_VPK], acc[slot, _A_FCMAX] = vmax, vpk, fcmax
-        acc[slot, _A_NIMP], acc[slot, _A_SVIMP] = n_imp, sum_vimp
-        r = n % ring_len
-        ring[r, 0], ring[r, 1], ring[r, 2] = x, v, V
-        if settle:
-            orbit = _orbit_period(ring, acc, gaps, n, ring_len, tol, p[P_VPERX], p[P_EPERX])
-            if orbit > 0 and n >= n_strobe:
-                status = SETTLED
-                break
-
-    j = n * n_steps
-    if j < n_series:
-        series[j, 0], series[j, 1], series[j, 2], series[j, 3] = x, v, V, fc
-    y[0], y[1], y[2], y[3] = x, v, V, vimp
-    for i in range(n_strobe):
-        age = n_strobe - 1 - i
-        valid = age <= n and status != DIVERGED
-        for c in range(3):
-            strobe[i, c] = ring[(n - age) % ring_len, c] if valid else np.nan
-    _reduce(acc, n, orbit if status == SETTLED else min(n, MAX_ORBIT_PERIOD), p, metrics)
-    metrics[M_ORBIT] = orbit
-    metrics[M_STATUS] = status
-    metrics[M_PERIODS] = n
-    if status == DIVERGED:
-        for i in range(M_ORBIT):
-            metrics[i] = np.nan
-
-
-@njit(**_JIT)
 def _orbit_period(ring, acc, gaps, n, ring_len, tol, v_per_x, e_per_x):
     """Orbit period p once the transient left in y(nT) is below ``tol``, else 0.
 
@@ -512,36 +363,3 @@ def _reduce(acc, n, periods, p, metrics):
     metrics[M_FCMAX] = fcmax
     metrics[M_IMPACTS] = n_imp / max(periods, 1)
     metrics[M_VIMP] = sum_vimp / n_imp if n_imp > 0 else np.nan
-
-
-@njit(parallel=True, **_JIT)
-def run_points(params, states, metrics, strobes):
-    """Run every point to steady state in parallel (one point per thread at a time).
-
-    ``params[i]`` is a parameter row, ``states[i]`` the state (updated in place),
-    ``metrics[i]`` and ``strobes[i]`` the outputs of :func:`run_point`. Points are
-    independent, so a point's result does not depend on the thread count.
-    """
-    no_series = np.empty((0, 4))
-    for i in prange(params.shape[0]):
-        run_point(params[i], states[i], metrics[i], strobes[i], no_series, True)
-
-
-def warm_up() -> None:
-    """Compile :func:`run_points` (or load it from numba's on-disk cache) without running."""
-    run_points(np.zeros((0, NP)), np.zeros((0, 4)), np.zeros((0, NM)), np.zeros((0, 0, 3)))
-
-
-def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarray:
-    """(x, v, V, F_c) at every step over ``periods`` forcing periods from ``state``.
-
-    Returns a float64 array of shape ``(periods * steps_per_period + 1, 4)``; ``state``
-    is not modified.
-    """
-    row = row.copy()
-    row[P_MAXP] = periods
-    n_steps = int(row[P_N])
-    series = np.empty((periods * n_steps + 1, 4))
-    metrics = np.empty(NM)
-    run_point(row, state.copy(), metrics, np.empty((0, 3)), series, False)
-    return series

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import kernel
+from . import kernel, lanes
 from .parameters import PRESET_NOTES, resolve_parameters
 from .stepping import halved, halving_error
 
@@ -59,7 +59,7 @@ class SceneResult:
             orbit = max(int(self.metrics["orbit_period"]), 1)
             periods = orbit * math.ceil(4 / orbit)
         row = kernel.pack_parameters(self.parameters)
-        values = kernel.record_series(row, self.state, periods)
+        values = lanes.record_series(row, self.state, periods)
         t0 = self.metrics["periods_run"] / self.parameters["frequency"]
         return series_dataset(values, t0, self.parameters)
 
@@ -105,14 +105,14 @@ def run_scene(preset: str | None = "paper", **parameters) -> SceneResult:
     row = kernel.pack_parameters(values)
     state = kernel.initial_state(values)
     metrics = np.empty(kernel.NM)
-    kernel.warm_up()  # compile or load from the on-disk cache outside the timing
+    lanes.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
-    kernel.run_points(row[None, :], state[None, :], metrics[None, :], np.empty((1, 0, 3)))
+    lanes.run_points(row[None, :], state[None, :], metrics[None, :], np.empty((1, 0, 3)))
     run_time = time.perf_counter() - start
     error = np.nan
     if metrics[kernel.M_STATUS] == kernel.SETTLED:  # step halving, from the settled state
         fine = np.empty(kernel.NM)
-        kernel.run_points(kernel.pack_parameters(halved(values))[None, :], state[None, :].copy(),
+        lanes.run_points(kernel.pack_parameters(halved(values))[None, :], state[None, :].copy(),
                           fine[None, :], np.empty((1, 0, 3)))
         error = halving_error(metrics, fine)
     out = _metrics_dict(metrics, values, run_time, error)

@@ -4,7 +4,7 @@ Work is split into *lines* and *chunks*. Under frequency continuation (``sweep.d
 a line is the frequency axis at fixed values of the other axes and one direction: each point
 starts from the previous point's final state. Without continuation every point is a line of
 one point, run from rest. A chunk is a run of whole lines; its lines go through
-:func:`kernel.run_points` together, one frequency step at a time, so numba's threads share
+:func:`lanes.run_points` together, one frequency step at a time, so numba's threads share
 them. Lines never interact, so a point's result does not depend on the chunking, the thread
 count or the machine that ran its chunk.
 
@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from . import kernel
+from . import kernel, lanes
 from .parameters import (
     PARAMETERS,
     PRESET_NOTES,
@@ -165,14 +165,14 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     rows, rest, refused = rows[:, deal], rest[deal], refused[:, deal]
     estimated = estimated[:, deal]
 
-    kernel.warm_up()  # compile or load from the on-disk cache outside the timing
+    lanes.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
     states = rest.copy()
     metrics = np.empty((length, n, kernel.NM))
     strobes = np.empty((length, n, spec.samples, 3))
     finals = np.empty((length, n, 4))
     for step in range(length):
-        kernel.run_points(rows[step], states, metrics[step], strobes[step])
+        lanes.run_points(rows[step], states, metrics[step], strobes[step])
         finals[step] = states
         metrics[step, refused[step]] = np.nan
         metrics[step, refused[step], kernel.M_STATUS] = kernel.TOO_STIFF
@@ -207,7 +207,7 @@ def _halving_errors(rows, finals, metrics, estimated) -> np.ndarray:
         halved = rows[estimated].copy()
         halved[:, kernel.P_N] *= 2
         fine = np.empty((len(halved), kernel.NM))
-        kernel.run_points(halved, finals[estimated].copy(), fine,
+        lanes.run_points(halved, finals[estimated].copy(), fine,
                           np.empty((len(halved), 0, 3)))
         errors[estimated] = halving_error(metrics[estimated], fine)
     return errors

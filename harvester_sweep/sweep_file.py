@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import kernel
+from . import kernel, lanes
 from .parameters import PARAMETERS, ParameterError, TooStiffError, resolve_parameters
 
 if sys.version_info >= (3, 11):
@@ -153,7 +153,8 @@ class SweepSpec:
                 "version": __version__,
                 # Chunks made by another kernel would not match: a development install
                 # changes the kernel without changing the version.
-                "kernel_sha256": hashlib.sha256(Path(kernel.__file__).read_bytes()).hexdigest(),
+                "kernel_sha256": hashlib.sha256(b"".join(
+                    Path(module.__file__).read_bytes() for module in (kernel, lanes))).hexdigest(),
                 "preset": self.preset,
                 "parameters": resolve_parameters(self.preset, **self.fixed),
                 "grid": {name: values.tolist() for name, values in self.grid.items()},

@@ -3,7 +3,7 @@
 import numba
 import numpy as np
 
-from harvester_sweep import kernel, resolve_parameters, run_scene
+from harvester_sweep import kernel, lanes, resolve_parameters, run_scene
 
 
 def _strip(metrics):
@@ -23,7 +23,7 @@ def test_point_independent_of_threads_and_neighbours():
         numba.set_num_threads(threads)
         states = np.array([kernel.initial_state(resolve_parameters("paper"))] * len(gaps))
         metrics = np.empty((len(gaps), kernel.NM))
-        kernel.run_points(rows, states, metrics, np.empty((len(gaps), 0, 3)))
+        lanes.run_points(rows, states, metrics, np.empty((len(gaps), 0, 3)))
         results.append((metrics, states))
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     np.testing.assert_array_equal(results[0][0], results[1][0])

@@ -1,0 +1,431 @@
+"""Many points stepped together: the lane-blocked driver of the RK4 kernel.
+
+Each thread takes a queue of points and steps LANES of them at once. The plain RK4 step
+of every lane is one branch-free loop over the lanes, which LLVM vectorizes; the rare
+steps that need more (a contact switch to locate, graded sub-steps next to a touch or a
+separation, an extremum or a force peak to place, the end of a forcing period) are
+finished lane by lane with the scalar functions of :mod:`harvester_sweep.kernel`. A lane
+whose point is done takes the next point of the queue, so that slow points do not hold
+a block back.
+
+A point's result does not depend on its lane, its queue or the thread count: the lane
+loop and the scalar code are compiled without FMA contraction, reassociation or
+approximate functions, so a lane computes the same bits whichever instructions run it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from .kernel import (
+    _A_FCMAX,
+    _A_NIMP,
+    _A_Q,
+    _A_SVIMP,
+    _A_VMAX,
+    _A_VPK,
+    _A_XMAX,
+    _A_XMIN,
+    _EQUAL,
+    _GAP_HISTORY,
+    _GRADED,
+    _NA,
+    _WHOLE,
+    DIVERGED,
+    FASTMATH,
+    M_ORBIT,
+    M_PERIODS,
+    M_STATUS,
+    MAX_ORBIT_PERIOD,
+    NM,
+    NOT_SETTLED,
+    NP,
+    P_A,
+    P_CH,
+    P_CM,
+    P_EPERX,
+    P_G,
+    P_IRC,
+    P_KHM,
+    P_LATCH,
+    P_LOCATE,
+    P_M,
+    P_MAXP,
+    P_N,
+    P_T,
+    P_THC,
+    P_THM,
+    P_TOL,
+    P_VPERX,
+    P_WN2,
+    P_XLIM,
+    SETTLED,
+    _hermite_crossing_rate,
+    _hermite_extremum,
+    _orbit_period,
+    _reduce,
+    _rk4,
+    _rk4_pieces,
+    _switch_step,
+)
+
+# The kernel's flags (see kernel.FASTMATH): nsz and arcp let LLVM vectorize the lane loop,
+# which has no division, so that arcp cannot make a vector lane differ from scalar code.
+_JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
+
+LANES = 16  # points stepped together by one thread
+
+# The lane table is one flat array of rows of LANES values; a row's constant offset lets
+# LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
+# Rows: the state of each lane's point...
+(_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
+ _SVIMP, _DV, _K, _N, _S, _C,
+ # ... the trial step of the lane loop and the state before it ...
+ _DQ, _A0, _NEED, _XO, _VO, _EO, _DVO, _FCO, _FCPO, _SO, _CO,
+ # ... and the parameters the lane loop reads.
+ _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH6, _PCA, _PSA,
+ _PNS, _PLOC, _PIM) = range(0, 51 * LANES, LANES)
+_ROWS = 51
+_OFF = 1e300  # moves a lane's trial value out of a running max or min
+
+
+@njit(**_JIT)
+def _load(L, j, p, y):
+    """Put the point of parameter row ``p`` and state ``y`` into lane ``j``, at t = 0."""
+    n_steps = p[P_N]
+    h = p[P_T] / n_steps
+    L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j] = p[P_A], p[P_WN2], p[P_CM], p[P_THM]
+    L[_PKHM + j], L[_PKH + j], L[_PG + j] = p[P_KHM], p[P_KHM] * p[P_M], p[P_G]
+    L[_PCHL + j] = p[P_LATCH]
+    L[_PIRC + j], L[_PTHC + j] = p[P_IRC], p[P_THC]
+    L[_PH + j], L[_PHH + j], L[_PH6 + j] = h, 0.5 * h, h / 6.0
+    L[_PCA + j], L[_PSA + j] = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
+    L[_PNS + j], L[_PLOC + j], L[_PIM + j] = n_steps, p[P_LOCATE], 1.0 / p[P_M]
+    x, v, e, vimp = y[0], y[1], y[2], y[3]
+    latch = p[P_LATCH]
+    ch = latch / vimp if latch > 0.0 else p[P_CH]
+    g = p[P_G]
+    L[_X + j], L[_V + j], L[_E + j], L[_VIMP + j], L[_CH + j] = x, v, e, vimp, ch
+    L[_ON + j] = 1.0 if p[P_LOCATE] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
+    L[_FINE + j] = 0.0
+    L[_K + j], L[_N + j] = 0.0, 0.0
+    _start_period(L, j)
+
+
+@njit(**_JIT)
+def _start_period(L, j):
+    """Reset the per-period accumulators of lane ``j`` and the forcing phase to 0."""
+    x, v, e = L[_X + j], L[_V + j], L[_E + j]
+    d = max(x - L[_PG + j], 0.0)
+    fc = L[_ON + j] * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + L[_CH + j] * v, 0.0)
+    L[_Q + j] = 0.0
+    L[_XMAX + j], L[_XMIN + j], L[_VMAX + j], L[_VPK + j] = x, x, abs(v), abs(e)
+    L[_FCP + j], L[_FC + j], L[_FCMAX + j] = fc, fc, fc
+    L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
+    L[_DV + j] = -L[_PIRC + j] * e - L[_PTHC + j] * v
+    L[_S + j], L[_C + j] = 0.0, 1.0
+
+
+@njit(**_JIT)
+def _lane_steps(L, lanes):
+    """One plain RK4 step of every lane, branch-free so that it vectorizes.
+
+    Lanes whose step needs more (a contact switch, graded sub-steps near a touch or a
+    separation, an extremum to place, a force peak, the end of a period) are marked in
+    _NEED and left for :func:`_finish_step`; the others are committed here.
+    """
+    for j in range(lanes):
+        x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
+        A, wn2, cm, thm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j]
+        khm, g, irc, thc = on * L[_PKHM + j], L[_PG + j], L[_PIRC + j], L[_PTHC + j]
+        h, hh, h6, ca, sa = L[_PH + j], L[_PHH + j], L[_PH6 + j], L[_PCA + j], L[_PSA + j]
+        # plain fixed steps with a latched law predict the approach velocity: in scalar
+        predict = (L[_PLOC + j] == 0.0) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
+        s0, c0 = L[_S + j], L[_C + j]
+        sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
+        s1 = sm * ca + cmid * sa
+        # the contact force at the start of the step is the one booked at the end of the last
+        a1 = A * s0 - cm * v - wn2 * x + thm * e - L[_FC + j] * L[_PIM + j]
+        e1 = -irc * e - thc * v
+        x2, v2, e2_ = x + hh * v, v + hh * a1, e + hh * e1
+        d = max(x2 - g, 0.0)
+        a2 = A * sm - cm * v2 - wn2 * x2 + thm * e2_ - khm * d * math.sqrt(d) * max(
+            1.0 + ch * v2, 0.0)
+        e2 = -irc * e2_ - thc * v2
+        x3, v3, e3_ = x + hh * v2, v + hh * a2, e + hh * e2
+        d = max(x3 - g, 0.0)
+        a3 = A * sm - cm * v3 - wn2 * x3 + thm * e3_ - khm * d * math.sqrt(d) * max(
+            1.0 + ch * v3, 0.0)
+        e3 = -irc * e3_ - thc * v3
+        x4, v4, e4_ = x + h * v3, v + h * a3, e + h * e3
+        d = max(x4 - g, 0.0)
+        a4 = A * s1 - cm * v4 - wn2 * x4 + thm * e4_ - khm * d * math.sqrt(d) * max(
+            1.0 + ch * v4, 0.0)
+        e4 = -irc * e4_ - thc * v4
+        xn = x + h6 * (v + 2.0 * (v2 + v3) + v4)
+        vn = v + h6 * (a1 + 2.0 * (a2 + a3) + a4)
+        en = e + h6 * (e1 + 2.0 * (e2 + e3) + e4)
+        dq = h6 * (e * e + 2.0 * (e2_ * e2_ + e3_ * e3_) + e4_ * e4_)
+        dvn = -irc * en - thc * vn
+        d = max(xn - g, 0.0)
+        fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
+        fc, fcp = L[_FC + j], L[_FCP + j]
+        located = L[_PLOC + j] != 0.0
+        switch = located & (((xn > g) & (1.0 + ch * vn > 0.0)) != (on == 1.0))
+        touch = (not located) & (x <= g) & (xn > g)
+        need = (switch | touch | (v * vn <= 0.0) | (L[_DV + j] * dvn <= 0.0)
+                | (L[_FINE + j] > 0.0)
+                | (located & (on == 1.0) & (v < 0.0) & (x - g < -3.0 * h * v))
+                | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)) | (L[_K + j] + 1.0 >= L[_PNS + j])
+                | predict)
+        # Commit the trial everywhere, without selects (they cost the vector loop a third):
+        # a lane marked _NEED gets its step redone from the saved state by _finish_step,
+        # and its trial values are kept out of the running sums, maxima and minima.
+        off = 1.0 if need else 0.0
+        L[_NEED + j], L[_DQ + j], L[_A0 + j] = off, dq, a1
+        L[_XO + j], L[_VO + j], L[_EO + j], L[_DVO + j] = x, v, e, L[_DV + j]
+        L[_FCO + j], L[_FCPO + j], L[_SO + j], L[_CO + j] = fc, fcp, s0, c0
+        L[_X + j], L[_V + j], L[_E + j], L[_DV + j] = xn, vn, en, dvn
+        L[_FCP + j], L[_FC + j] = fc, fcn
+        L[_S + j], L[_C + j] = s1, cmid * ca - sm * sa
+        L[_Q + j] += (1.0 - off) * dq
+        L[_K + j] += 1.0 - off
+        L[_XMAX + j] = max(L[_XMAX + j], xn - _OFF * off)
+        L[_XMIN + j] = min(L[_XMIN + j], xn + _OFF * off)
+        L[_VMAX + j] = max(L[_VMAX + j], abs(vn) - _OFF * off)
+        L[_VPK + j] = max(L[_VPK + j], abs(en) - _OFF * off)
+        L[_FCMAX + j] = max(L[_FCMAX + j], fcn - _OFF * off)
+
+
+@njit(**_JIT)
+def _finish_step(L, j):
+    """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)."""
+    x, v, e, on, ch = L[_XO + j], L[_VO + j], L[_EO + j], L[_ON + j], L[_CH + j]
+    xn, vn, en, dq, a0 = L[_X + j], L[_V + j], L[_E + j], L[_DQ + j], L[_A0 + j]
+    L[_DV + j], L[_FC + j], L[_FCP + j] = L[_DVO + j], L[_FCO + j], L[_FCPO + j]
+    L[_S + j], L[_C + j] = L[_SO + j], L[_CO + j]
+    A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
+    g, irc, thc, h, latch = L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_PH + j], L[_PCHL + j]
+    k, n_steps = int(L[_K + j]), int(L[_PNS + j])
+    fine = L[_FINE + j]
+    if L[_PLOC + j] == 0.0:
+        if latch > 0.0 and x <= g and v > 0.0:  # predicted approach velocity: redo the step
+            ch = latch / v
+            s0, c0, ca, sa = L[_S + j], L[_C + j], L[_PCA + j], L[_PSA + j]
+            sm = s0 * ca + c0 * sa
+            s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+            xn, vn, en, dq, a0 = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm,
+                                      g, ch, irc, thc)
+        if x <= g < xn:  # first touch, on the cubic Hermite interpolant
+            v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
+            L[_NIMP + j] += 1.0
+            L[_SVIMP + j] += v_on
+            if latch > 0.0 and v_on > 0.0:
+                L[_VIMP + j] = v_on
+                ch = latch / v_on
+    elif (xn > g and 1.0 + ch * vn > 0.0) != (on == 1.0):
+        kind, theta = _switch_step(x, v, e, a0, xn, vn, en, on, k, n_steps, h, A, wn2, cm, thm,
+                                   khm, g, ch, irc, thc)
+        # Up to the switch with the old contact state (graded towards a separation)...
+        xe, ve, ee, q1 = _rk4_pieces(
+            x, v, e, 0.0, theta, _GRADED if on == 1.0 and kind == 1 else _WHOLE, True, k,
+            n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
+        onset = on == 0.0 and kind == 1
+        if onset:
+            L[_NIMP + j] += 1.0
+            L[_SVIMP + j] += ve
+            if latch > 0.0 and ve > 0.0:
+                L[_VIMP + j] = ve
+                ch = latch / ve
+        on = 1.0 - on
+        # ... and after it with the new one (graded from a touch).
+        xn, vn, en, q2 = _rk4_pieces(xe, ve, ee, theta, 1.0 - theta, _GRADED if onset else _WHOLE,
+                                     False, k, n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc,
+                                     thc)
+        dq = q1 + q2
+        fine = 3.0 if onset else 0.0
+    elif fine > 0.0 or (on == 1.0 and v < 0.0 and x - g < -3.0 * h * v):
+        # The steps just after a touch or before a separation still see the
+        # (t - t_0)^1.5 force: quarter steps there.
+        xn, vn, en, dq = _rk4_pieces(x, v, e, 0.0, 1.0, _EQUAL, False, k, n_steps, h, A, wn2,
+                                     cm, thm, on * khm, g, ch, irc, thc)
+        fine = max(fine - 1.0, 0.0)
+    dv, dvn = L[_DV + j], -irc * en - thc * vn
+    if v > 0.0 >= vn or v < 0.0 <= vn:
+        xe = _hermite_extremum(x, v, xn, vn, h)
+        L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], xe), min(L[_XMIN + j], xe)
+    if (dv > 0.0) != (dvn > 0.0):
+        L[_VPK + j] = max(L[_VPK + j], abs(_hermite_extremum(e, dv, en, dvn, h)))
+    d = max(xn - g, 0.0)
+    fc, fcp = L[_FC + j], L[_FCP + j]
+    fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
+    if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
+        a = 0.5 * (fcp + fcn) - fc
+        b = 0.5 * (fcn - fcp)
+        L[_FCMAX + j] = max(L[_FCMAX + j], fc - b * b / (4.0 * a))
+    L[_X + j], L[_V + j], L[_E + j], L[_DV + j] = xn, vn, en, dvn
+    L[_FCP + j], L[_FC + j] = fc, fcn
+    L[_ON + j], L[_CH + j], L[_FINE + j] = on, ch, fine
+    L[_Q + j] += dq
+    L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], xn), min(L[_XMIN + j], xn)
+    L[_VMAX + j], L[_VPK + j] = max(L[_VMAX + j], abs(vn)), max(L[_VPK + j], abs(en))
+    L[_FCMAX + j] = max(L[_FCMAX + j], fcn)
+    s0, c0, ca, sa = L[_S + j], L[_C + j], L[_PCA + j], L[_PSA + j]
+    sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
+    L[_S + j], L[_C + j] = sm * ca + cmid * sa, cmid * ca - sm * sa
+    L[_K + j] += 1.0
+
+
+@njit(**_JIT)
+def _end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle):
+    """Book the period that lane ``j`` just finished; the status once it is done, else -1."""
+    x, v, e, q = L[_X + j], L[_V + j], L[_E + j], L[_Q + j]
+    n = int(L[_N + j]) + 1
+    L[_N + j] = n
+    L[_K + j] = 0.0
+    if not (math.isfinite(x + v + e + q) and abs(x) <= p[P_XLIM]):
+        return DIVERGED, 0
+    slot = (n - 1) % MAX_ORBIT_PERIOD
+    acc[slot, _A_Q], acc[slot, _A_XMAX], acc[slot, _A_XMIN] = q, L[_XMAX + j], L[_XMIN + j]
+    acc[slot, _A_VMAX], acc[slot, _A_VPK] = L[_VMAX + j], L[_VPK + j]
+    acc[slot, _A_FCMAX], acc[slot, _A_NIMP], acc[slot, _A_SVIMP] = (
+        L[_FCMAX + j], L[_NIMP + j], L[_SVIMP + j])
+    r = n % ring_len
+    ring[r, 0], ring[r, 1], ring[r, 2] = x, v, e
+    _start_period(L, j)
+    if settle:
+        orbit = _orbit_period(ring, acc, gaps, n, ring_len, p[P_TOL], p[P_VPERX], p[P_EPERX])
+        if orbit > 0 and n >= n_strobe:
+            return SETTLED, orbit
+    if n >= int(p[P_MAXP]):
+        return NOT_SETTLED, 0
+    return -1, 0
+
+
+@njit(**_JIT)
+def _output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
+    """Write the state, stroboscopic samples and metrics of lane ``j``'s finished point."""
+    n = int(L[_N + j])
+    y[0], y[1], y[2], y[3] = L[_X + j], L[_V + j], L[_E + j], L[_VIMP + j]
+    n_strobe = strobe.shape[0]
+    for i in range(n_strobe):
+        age = n_strobe - 1 - i
+        valid = age <= n and status != DIVERGED
+        for c in range(3):
+            strobe[i, c] = ring[(n - age) % ring_len, c] if valid else np.nan
+    _reduce(acc, n, orbit if status == SETTLED else min(n, MAX_ORBIT_PERIOD), p, metrics)
+    metrics[M_ORBIT] = orbit
+    metrics[M_STATUS] = status
+    metrics[M_PERIODS] = n
+    if status == DIVERGED:
+        for i in range(M_ORBIT):
+            metrics[i] = np.nan
+
+
+@njit(**_JIT)
+def _run_queue(params, states, metrics, strobes, series, settle, queue):
+    """Run the points ``queue`` (indices) to the end, LANES at a time; a lane whose point
+    is done takes the next one, so that no lane waits for the slowest point."""
+    lanes = min(LANES, len(queue))
+    n_strobe = strobes.shape[1]
+    ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
+    L = np.zeros(_ROWS * LANES)
+    ring = np.empty((lanes, ring_len, 3))
+    acc = np.zeros((lanes, MAX_ORBIT_PERIOD, _NA))
+    gaps = np.empty((lanes, _GAP_HISTORY, MAX_ORBIT_PERIOD + 1))
+    point = np.full(lanes, -1)
+    n_series = series.shape[0]
+    taken = 0
+    for j in range(lanes):
+        _take(L, j, params, states, queue[taken], ring, acc, gaps)
+        point[j] = queue[taken]
+        taken += 1
+    active = lanes
+    while active > 0:
+        if n_series > 0:  # one point recorded at every step boundary
+            i = int(L[_N + 0] * L[_PNS + 0] + L[_K + 0])
+            if i < n_series:
+                series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
+                series[i, 3] = L[_FC + 0]
+        _lane_steps(L, lanes)
+        for j in range(lanes):
+            if L[_NEED + j] == 0.0 or point[j] < 0:
+                continue
+            _finish_step(L, j)
+            if L[_K + j] < L[_PNS + j]:
+                continue
+            pt = point[j]
+            status, orbit = _end_period(L, j, params[pt], ring[j], acc[j], gaps[j], ring_len,
+                                        n_strobe, settle)
+            if status < 0:
+                continue
+            if n_series > 0:
+                i = int(L[_N + 0] * L[_PNS + 0])
+                if i < n_series:
+                    series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
+                    series[i, 3] = L[_FC + 0]
+            _output(L, j, params[pt], states[pt], metrics[pt], strobes[pt], ring[j], acc[j],
+                    ring_len, status, orbit)
+            if taken < len(queue):
+                _take(L, j, params, states, queue[taken], ring, acc, gaps)
+                point[j] = queue[taken]
+                taken += 1
+            else:  # idle: no forcing, no contact, never at a period end
+                point[j] = -1
+                L[_PA + j], L[_PKHM + j], L[_PNS + j] = 0.0, 0.0, np.inf
+                L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
+                active -= 1
+
+
+@njit(**_JIT)
+def _take(L, j, params, states, pt, ring, acc, gaps):
+    _load(L, j, params[pt], states[pt])
+    ring[j, 0, 0], ring[j, 0, 1], ring[j, 0, 2] = L[_X + j], L[_V + j], L[_E + j]
+    acc[j, :, :] = 0.0
+    gaps[j, :, :] = np.inf
+
+
+def run_points(params, states, metrics, strobes) -> None:
+    """Run every point to steady state, on all numba threads.
+
+    ``params[i]`` is a parameter row (``kernel.pack_parameters``), ``states[i]`` the state
+    (updated in place), ``metrics[i]`` and ``strobes[i]`` the outputs (``kernel.METRIC_NAMES``;
+    the last S stroboscopic samples). Points are independent and each is computed by the
+    same instructions whichever lane or thread takes it, so a point's result does not
+    depend on the thread count or on the other points.
+    """
+    queues = min(numba.get_num_threads(), max(1, -(-params.shape[0] // LANES)))
+    _run_queues(params, states, metrics, strobes, queues)
+
+
+@njit(parallel=True, **_JIT)
+def _run_queues(params, states, metrics, strobes, queues):
+    """One queue of points per thread, the points dealt in turn (neighbours cost alike)."""
+    no_series = np.empty((0, 4))
+    for b in prange(queues):
+        _run_queue(params, states, metrics, strobes, no_series, True,
+                   np.arange(b, params.shape[0], queues))
+
+
+def warm_up() -> None:
+    """Compile :func:`run_points` (or load it from numba's on-disk cache) without running."""
+    run_points(np.zeros((0, NP)), np.zeros((0, 4)), np.zeros((0, NM)), np.zeros((0, 0, 3)))
+
+
+def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarray:
+    """(x, v, V, F_c) at every step over ``periods`` forcing periods from ``state``.
+
+    Returns a float64 array of shape ``(periods * steps_per_period + 1, 4)``; ``state``
+    is not modified.
+    """
+    row = row.copy()
+    row[P_MAXP] = periods
+    n_steps = int(row[P_N])
+    series = np.empty((periods * n_steps + 1, 4))
+    _run_queue(row[None, :], state.copy()[None, :], np.empty((1, NM)), np.empty((1, 0, 3)),
+               series, False, np.zeros(1, dtype=np.int64))
+    return series
