@@ -154,16 +154,9 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
                 refused[step, i] = True
             rows[step, i] = kernel.pack_parameters(point)
         rest[i] = kernel.initial_state(point)  # impact_velocity is constant along a line
-    # numba gives each thread one contiguous block of a prange; neighbouring lines cost alike
-    # (a linear orbit may take 10x the periods of an impacting one), so deal the lines out in
-    # turn to balance the blocks. Lines are independent: the results do not change.
-    turns = numba.get_num_threads()
-    deal = np.concatenate([np.arange(k, n, turns) for k in range(turns)])
     position = np.where(reverse[None, :], length - 1 - np.arange(length)[:, None],
                         np.arange(length)[:, None])
     estimated = spec.estimated(np.asarray(lines)[None, :] * length + position) & ~refused
-    rows, rest, refused = rows[:, deal], rest[deal], refused[:, deal]
-    estimated = estimated[:, deal]
 
     lanes.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
@@ -186,9 +179,7 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     run_time = time.perf_counter() - start
     errors = _halving_errors(rows, finals, metrics, estimated)
 
-    undo = np.argsort(deal)
-    metrics, strobes = metrics[:, undo].swapaxes(0, 1), strobes[:, undo].swapaxes(0, 1)
-    errors = errors[:, undo].swapaxes(0, 1)
+    metrics, strobes, errors = metrics.swapaxes(0, 1), strobes.swapaxes(0, 1), errors.swapaxes(0, 1)
     metrics[reverse] = metrics[reverse, ::-1]  # down lines ran from the highest frequency
     strobes[reverse] = strobes[reverse, ::-1]
     errors[reverse] = errors[reverse, ::-1]
