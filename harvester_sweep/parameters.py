@@ -261,7 +261,7 @@ class StabilityWarning(UserWarning):
 
 
 def _check_step(p: dict) -> None:
-    """Choose steps_per_period when unset; check an explicit one.
+    """Choose steps_per_period and max_periods when unset; check an explicit step.
 
     An explicit step must resolve the forcing and natural oscillations (16 steps per cycle)
     and keep the load circuit's exact decay rate 1/(R C_p) inside RK4's stability bound
