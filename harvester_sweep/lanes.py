@@ -88,8 +88,9 @@ LANES = 16  # points stepped together by one thread
  _DQ, _A0, _NEED, _XO, _VO, _EO, _DVO, _FCO, _FCPO, _SO, _CO,
  # ... and the parameters the lane loop reads.
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH6, _PCA, _PSA,
- _PNS, _PLOC, _PIM) = range(0, 51 * LANES, LANES)
-_ROWS = 51
+ _PNS, _PLOC, _PIM, _KSYNC) = range(0, 52 * LANES, LANES)
+_ROWS = 52
+_SYNC = 256.0  # steps between exact resets of the forcing rotation (its rounding drifts)
 _OFF = 1e300  # moves a lane's trial value out of a running max or min
 
 
@@ -128,6 +129,7 @@ def _start_period(L, j):
     L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
     L[_DV + j] = -L[_PIRC + j] * e - L[_PTHC + j] * v
     L[_S + j], L[_C + j] = 0.0, 1.0
+    L[_KSYNC + j] = _SYNC
 
 
 @njit(**_JIT)
@@ -181,6 +183,7 @@ def _lane_steps(L, lanes):
                 | (L[_FINE + j] > 0.0)
                 | (located & (on == 1.0) & (v < 0.0) & (x - g < -3.0 * h * v))
                 | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)) | (L[_K + j] + 1.0 >= L[_PNS + j])
+                | (L[_K + j] + 1.0 >= L[_KSYNC + j])
                 | predict)
         # Commit the trial everywhere, without selects (they cost the vector loop a third):
         # a lane marked _NEED gets its step redone from the saved state by _finish_step,
@@ -278,6 +281,10 @@ def _finish_step(L, j):
     sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
     L[_S + j], L[_C + j] = sm * ca + cmid * sa, cmid * ca - sm * sa
     L[_K + j] += 1.0
+    if L[_K + j] >= L[_KSYNC + j]:  # the rotation back on the exact phase 2 pi k / N
+        phase = 2.0 * math.pi * L[_K + j] / L[_PNS + j]
+        L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
+        L[_KSYNC + j] += _SYNC
 
 
 @njit(**_JIT)
