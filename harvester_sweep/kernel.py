@@ -139,7 +139,7 @@ def initial_state(p: dict) -> np.ndarray:
     return np.array([x0, 0.0, 0.0, p["impact_velocity"]])
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _derivatives(x, v, V, f, wn2, cm, thm, khm, g, ch, irc, thc):
     """Acceleration [m/s^2] and dV/dt [V/s]; the contact never pulls (factor clipped at 0)."""
     d = max(x - g, 0.0)
@@ -186,7 +186,7 @@ def _hermite_crossing_rate(y0, d0, y1, d1, h, level):
     return (h * d0 + 2.0 * B * s + 3.0 * C * s * s) / h
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _rk4(x, v, V, dt, f0, fm, f1, wn2, cm, thm, khm, g, ch, irc, thc):
     """One classical RK4 step of length dt [s].
 

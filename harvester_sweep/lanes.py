@@ -87,9 +87,9 @@ LANES = 16  # points stepped together by one thread
  # ... the trial step of the lane loop and the state before it ...
  _DQ, _A0, _NEED, _XO, _VO, _EO, _DVO, _FCO, _FCPO, _SO, _CO,
  # ... and the parameters the lane loop reads.
- _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH6, _PCA, _PSA,
- _PNS, _PLOC, _PIM, _KSYNC) = range(0, 52 * LANES, LANES)
-_ROWS = 52
+ _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PNS, _PLOC,
+ _KSYNC) = range(0, 49 * LANES, LANES)
+_ROWS = 49
 _SYNC = 256.0  # steps between exact resets of the forcing rotation (its rounding drifts)
 _OFF = 1e300  # moves a lane's trial value out of a running max or min
 
@@ -103,9 +103,9 @@ def _load(L, j, p, y):
     L[_PKHM + j], L[_PKH + j], L[_PG + j] = p[P_KHM], p[P_KHM] * p[P_M], p[P_G]
     L[_PCHL + j] = p[P_LATCH]
     L[_PIRC + j], L[_PTHC + j] = p[P_IRC], p[P_THC]
-    L[_PH + j], L[_PHH + j], L[_PH6 + j] = h, 0.5 * h, h / 6.0
+    L[_PH + j] = h
     L[_PCA + j], L[_PSA + j] = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
-    L[_PNS + j], L[_PLOC + j], L[_PIM + j] = n_steps, p[P_LOCATE], 1.0 / p[P_M]
+    L[_PNS + j], L[_PLOC + j] = n_steps, p[P_LOCATE]
     x, v, e, vimp = y[0], y[1], y[2], y[3]
     latch = p[P_LATCH]
     ch = latch / vimp if latch > 0.0 else p[P_CH]
@@ -144,34 +144,14 @@ def _lane_steps(L, lanes):
         x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
         A, wn2, cm, thm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j]
         khm, g, irc, thc = on * L[_PKHM + j], L[_PG + j], L[_PIRC + j], L[_PTHC + j]
-        h, hh, h6, ca, sa = L[_PH + j], L[_PHH + j], L[_PH6 + j], L[_PCA + j], L[_PSA + j]
+        h, ca, sa = L[_PH + j], L[_PCA + j], L[_PSA + j]
         # plain fixed steps with a latched law predict the approach velocity: in scalar
         predict = (L[_PLOC + j] == 0.0) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
         s0, c0 = L[_S + j], L[_C + j]
         sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
         s1 = sm * ca + cmid * sa
-        # the contact force at the start of the step is the one booked at the end of the last
-        a1 = A * s0 - cm * v - wn2 * x + thm * e - L[_FC + j] * L[_PIM + j]
-        e1 = -irc * e - thc * v
-        x2, v2, e2_ = x + hh * v, v + hh * a1, e + hh * e1
-        d = max(x2 - g, 0.0)
-        a2 = A * sm - cm * v2 - wn2 * x2 + thm * e2_ - khm * d * math.sqrt(d) * max(
-            1.0 + ch * v2, 0.0)
-        e2 = -irc * e2_ - thc * v2
-        x3, v3, e3_ = x + hh * v2, v + hh * a2, e + hh * e2
-        d = max(x3 - g, 0.0)
-        a3 = A * sm - cm * v3 - wn2 * x3 + thm * e3_ - khm * d * math.sqrt(d) * max(
-            1.0 + ch * v3, 0.0)
-        e3 = -irc * e3_ - thc * v3
-        x4, v4, e4_ = x + h * v3, v + h * a3, e + h * e3
-        d = max(x4 - g, 0.0)
-        a4 = A * s1 - cm * v4 - wn2 * x4 + thm * e4_ - khm * d * math.sqrt(d) * max(
-            1.0 + ch * v4, 0.0)
-        e4 = -irc * e4_ - thc * v4
-        xn = x + h6 * (v + 2.0 * (v2 + v3) + v4)
-        vn = v + h6 * (a1 + 2.0 * (a2 + a3) + a4)
-        en = e + h6 * (e1 + 2.0 * (e2 + e3) + e4)
-        dq = h6 * (e * e + 2.0 * (e2_ * e2_ + e3_ * e3_) + e4_ * e4_)
+        xn, vn, en, dq, a1 = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm, g, ch,
+                                  irc, thc)
         dvn = -irc * en - thc * vn
         d = max(xn - g, 0.0)
         fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
