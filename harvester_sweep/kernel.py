@@ -84,14 +84,12 @@ _GAP_HISTORY = 4 * MAX_ORBIT_PERIOD  # periods of e_p(n) kept to estimate the de
 def pack_parameters(p: dict) -> np.ndarray:
     """Kernel parameter row from a validated parameter dict (SI units)."""
     from .contact import damping_factor
+    from .stepping import contact_damping_value
 
     wn = 2.0 * math.pi * p["natural_frequency"]
     m = p["mass"]
     latched = p["contact_damping"] is None and p["impact_velocity_mode"] == "latched"
-    if p["contact_damping"] is not None:
-        ch = p["contact_damping"]
-    else:
-        ch = damping_factor(p["contact_law"], p["restitution"]) / p["impact_velocity"]
+    ch = contact_damping_value(p, p["impact_velocity"])
     row = np.zeros(NP)
     row[P_A] = p["amplitude"]
     row[P_WN2] = wn * wn

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact import damping_factor
+from .contact import contact_damping
 
 #: |h lambda| that RK4 keeps stable (2.78 on the negative real axis, 2.83 on the imaginary).
 RK4_STABILITY = 2.5
@@ -62,7 +62,7 @@ def contact_damping_value(p: dict, impact_velocity: float) -> float:
     if p["contact_damping"] is not None:
         return p["contact_damping"]
     velocity = p["impact_velocity"] if p["impact_velocity_mode"] == "fixed" else impact_velocity
-    return damping_factor(p["contact_law"], p["restitution"]) / velocity
+    return contact_damping(p["contact_law"], p["restitution"], velocity)
 
 
 def time_scales(p: dict) -> TimeScales:
