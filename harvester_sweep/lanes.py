@@ -385,7 +385,7 @@ def run_points(params, states, metrics, strobes) -> None:
     same instructions whichever lane or thread takes it, so a point's result does not
     depend on the thread count or on the other points.
     """
-    queues = min(numba.get_num_threads(), max(1, -(-params.shape[0] // LANES)))
+    queues = max(1, min(numba.get_num_threads(), params.shape[0]))
     _run_queues(params, states, metrics, strobes, queues)
 
 
