@@ -138,10 +138,16 @@ def initial_state(p: dict) -> np.ndarray:
 
 
 @njit(inline="always", **_JIT)
-def _derivatives(x, v, V, f, wn2, cm, thm, khm, g, ch, irc, thc):
-    """Acceleration [m/s^2] and dV/dt [V/s]; the contact never pulls (factor clipped at 0)."""
-    d = max(x - g, 0.0)
-    a = f - cm * v - wn2 * x + thm * V - khm * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
+def _derivatives(x, v, V, f, wn2, cm, thm, khm, g, ch, irc, thc, contact=True):
+    """Acceleration [m/s^2] and dV/dt [V/s]; the contact never pulls (factor clipped at 0).
+
+    ``contact=False`` (a constant at the call) leaves the contact term out of the code: the
+    same bits as khm = 0, without its square root.
+    """
+    a = f - cm * v - wn2 * x + thm * V
+    if contact:
+        d = max(x - g, 0.0)
+        a = a - khm * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
     return a, -irc * V - thc * v
 
 
@@ -185,21 +191,22 @@ def _hermite_crossing_rate(y0, d0, y1, d1, h, level):
 
 
 @njit(inline="always", **_JIT)
-def _rk4(x, v, V, dt, f0, fm, f1, wn2, cm, thm, khm, g, ch, irc, thc):
+def _rk4(x, v, V, dt, f0, fm, f1, wn2, cm, thm, khm, g, ch, irc, thc, contact=True):
     """One classical RK4 step of length dt [s].
 
     f0, fm, f1 are the forcing accelerations A sin(w t) at the start, middle and end of the
-    step [m/s^2]; khm = 0 switches the contact off. Returns x, v, V at the end, the
+    step [m/s^2]; khm = 0 switches the contact off, and so does ``contact=False`` (see
+    _derivatives). Returns x, v, V at the end, the
     integral of V^2 over the step [V^2 s] and the acceleration at the start [m/s^2].
     """
     hh, h6 = 0.5 * dt, dt / 6.0
-    a1, e1 = _derivatives(x, v, V, f0, wn2, cm, thm, khm, g, ch, irc, thc)
+    a1, e1 = _derivatives(x, v, V, f0, wn2, cm, thm, khm, g, ch, irc, thc, contact)
     x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
-    a2, e2 = _derivatives(x2, v2, V2, fm, wn2, cm, thm, khm, g, ch, irc, thc)
+    a2, e2 = _derivatives(x2, v2, V2, fm, wn2, cm, thm, khm, g, ch, irc, thc, contact)
     x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
-    a3, e3 = _derivatives(x3, v3, V3, fm, wn2, cm, thm, khm, g, ch, irc, thc)
+    a3, e3 = _derivatives(x3, v3, V3, fm, wn2, cm, thm, khm, g, ch, irc, thc, contact)
     x4, v4, V4 = x + dt * v3, v + dt * a3, V + dt * e3
-    a4, e4 = _derivatives(x4, v4, V4, f1, wn2, cm, thm, khm, g, ch, irc, thc)
+    a4, e4 = _derivatives(x4, v4, V4, f1, wn2, cm, thm, khm, g, ch, irc, thc, contact)
     return (
         x + h6 * (v + 2.0 * (v2 + v3) + v4),
         v + h6 * (a1 + 2.0 * (a2 + a3) + a4),

@@ -85,11 +85,11 @@ LANES = 16  # points stepped together by one thread
 (_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
  _SVIMP, _DV, _K, _N, _S, _C,
  # ... the trial step of the lane loop and the state before it ...
- _DQ, _A0, _NEED, _XO, _VO, _EO, _DVO, _FCO, _FCPO, _SO, _CO,
+ _XN, _VN, _EN, _DQ, _A0, _NEED,
  # ... and the parameters the lane loop reads.
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PNS, _PLOC,
- _KSYNC) = range(0, 49 * LANES, LANES)
-_ROWS = 49
+ _KSYNC) = range(0, 44 * LANES, LANES)
+_ROWS = 44
 _SYNC = 256.0  # steps between exact resets of the forcing rotation (its rounding drifts)
 _OFF = 1e300  # moves a lane's trial value out of a running max or min
 
@@ -133,30 +133,56 @@ def _start_period(L, j):
 
 
 @njit(**_JIT)
-def _lane_steps(L, lanes):
-    """One plain RK4 step of every lane, branch-free so that it vectorizes.
+def _lane_steps(L):
+    """One plain RK4 step of every lane, in two branch-free loops that LLVM vectorizes.
 
+    The first loop runs the RK4 stages into trial rows; its iterations are long chains of
+    dependent operations, kept short so that the processor overlaps several. The second
+    commits. When no lane is in contact, the stages are compiled without the contact
+    force (no square roots): the same bits as the full code, whose force is 0 there.
     Lanes whose step needs more (a contact switch, graded sub-steps near a touch or a
     separation, an extremum to place, a force peak, the end of a period) are marked in
     _NEED and left for :func:`_finish_step`; the others are committed here.
     """
-    for j in range(lanes):
+    touching = 0.0
+    for j in range(LANES):
+        touching += L[_ON + j]
+    if touching == 0.0:
+        _trial_steps(L, False)
+        _commit_steps(L, False)
+    else:
+        _trial_steps(L, True)
+        _commit_steps(L, True)
+
+
+@njit(inline="always", **_JIT)
+def _trial_steps(L, contact):
+    for j in range(LANES):
+        x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
+        A, ca, sa, s0, c0 = L[_PA + j], L[_PCA + j], L[_PSA + j], L[_S + j], L[_C + j]
+        sm = s0 * ca + c0 * sa
+        s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+        xn, vn, en, dq, a1 = _rk4(x, v, e, L[_PH + j], A * s0, A * sm, A * s1, L[_PWN2 + j],
+                                  L[_PCM + j], L[_PTHM + j], L[_ON + j] * L[_PKHM + j],
+                                  L[_PG + j], ch, L[_PIRC + j], L[_PTHC + j], contact)
+        L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j], L[_A0 + j] = xn, vn, en, dq, a1
+
+
+@njit(inline="always", **_JIT)
+def _commit_steps(L, contact):
+    for j in range(LANES):
         x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
-        A, wn2, cm, thm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j]
-        khm, g, irc, thc = on * L[_PKHM + j], L[_PG + j], L[_PIRC + j], L[_PTHC + j]
-        h, ca, sa = L[_PH + j], L[_PCA + j], L[_PSA + j]
-        # plain fixed steps with a latched law predict the approach velocity: in scalar
-        predict = (L[_PLOC + j] == 0.0) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
+        xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
+        g, h, ca, sa = L[_PG + j], L[_PH + j], L[_PCA + j], L[_PSA + j]
         s0, c0 = L[_S + j], L[_C + j]
         sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
-        s1 = sm * ca + cmid * sa
-        xn, vn, en, dq, a1 = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm, g, ch,
-                                  irc, thc)
-        dvn = -irc * en - thc * vn
+        dvn = -L[_PIRC + j] * en - L[_PTHC + j] * vn
         d = max(xn - g, 0.0)
-        fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
+        fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0) if contact else 0.0
         fc, fcp = L[_FC + j], L[_FCP + j]
         located = L[_PLOC + j] != 0.0
+        # plain fixed steps with a latched law predict the approach velocity: in scalar
+        predict = (not located) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
         switch = located & (((xn > g) & (1.0 + ch * vn > 0.0)) != (on == 1.0))
         touch = (not located) & (x <= g) & (xn > g)
         need = (switch | touch | (v * vn <= 0.0) | (L[_DV + j] * dvn <= 0.0)
@@ -165,32 +191,31 @@ def _lane_steps(L, lanes):
                 | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)) | (L[_K + j] + 1.0 >= L[_PNS + j])
                 | (L[_K + j] + 1.0 >= L[_KSYNC + j])
                 | predict)
-        # Commit the trial everywhere, without selects (they cost the vector loop a third):
-        # a lane marked _NEED gets its step redone from the saved state by _finish_step,
-        # and its trial values are kept out of the running sums, maxima and minima.
+        # A lane marked _NEED keeps its state, for _finish_step to redo the step from it
+        # (the trial stays in the trial rows); its trial values are kept out of the running
+        # sums, maxima and minima without branches.
         off = 1.0 if need else 0.0
-        L[_NEED + j], L[_DQ + j], L[_A0 + j] = off, dq, a1
-        L[_XO + j], L[_VO + j], L[_EO + j], L[_DVO + j] = x, v, e, L[_DV + j]
-        L[_FCO + j], L[_FCPO + j], L[_SO + j], L[_CO + j] = fc, fcp, s0, c0
-        L[_X + j], L[_V + j], L[_E + j], L[_DV + j] = xn, vn, en, dvn
-        L[_FCP + j], L[_FC + j] = fc, fcn
-        L[_S + j], L[_C + j] = s1, cmid * ca - sm * sa
+        L[_NEED + j] = off
+        L[_X + j], L[_V + j], L[_E + j] = x if need else xn, v if need else vn, e if need else en
+        L[_DV + j] = L[_DV + j] if need else dvn
+        L[_FCP + j], L[_FC + j] = fcp if need else fc, fc if need else fcn
+        L[_S + j] = s0 if need else sm * ca + cmid * sa
+        L[_C + j] = c0 if need else cmid * ca - sm * sa
         L[_Q + j] += (1.0 - off) * dq
         L[_K + j] += 1.0 - off
         L[_XMAX + j] = max(L[_XMAX + j], xn - _OFF * off)
         L[_XMIN + j] = min(L[_XMIN + j], xn + _OFF * off)
         L[_VMAX + j] = max(L[_VMAX + j], abs(vn) - _OFF * off)
         L[_VPK + j] = max(L[_VPK + j], abs(en) - _OFF * off)
-        L[_FCMAX + j] = max(L[_FCMAX + j], fcn - _OFF * off)
+        if contact:  # (else fcn = 0 and the maximum, which starts at a force, is >= 0)
+            L[_FCMAX + j] = max(L[_FCMAX + j], fcn - _OFF * off)
 
 
 @njit(**_JIT)
 def _finish_step(L, j):
     """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)."""
-    x, v, e, on, ch = L[_XO + j], L[_VO + j], L[_EO + j], L[_ON + j], L[_CH + j]
-    xn, vn, en, dq, a0 = L[_X + j], L[_V + j], L[_E + j], L[_DQ + j], L[_A0 + j]
-    L[_DV + j], L[_FC + j], L[_FCP + j] = L[_DVO + j], L[_FCO + j], L[_FCPO + j]
-    L[_S + j], L[_C + j] = L[_SO + j], L[_CO + j]
+    x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
+    xn, vn, en, dq, a0 = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j], L[_A0 + j]
     A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
     g, irc, thc, h, latch = L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_PH + j], L[_PCHL + j]
     k, n_steps = int(L[_K + j]), int(L[_PNS + j])
@@ -327,6 +352,8 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
     point = np.full(lanes, -1)
     n_series = series.shape[0]
     taken = 0
+    for j in range(lanes, LANES):
+        _idle(L, j)
     for j in range(lanes):
         _take(L, j, params, states, queue[taken], ring, acc, gaps)
         point[j] = queue[taken]
@@ -338,7 +365,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
             if i < n_series:
                 series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
                 series[i, 3] = L[_FC + 0]
-        _lane_steps(L, lanes)
+        _lane_steps(L)
         for j in range(lanes):
             if L[_NEED + j] == 0.0 or point[j] < 0:
                 continue
@@ -361,11 +388,17 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
                 _take(L, j, params, states, queue[taken], ring, acc, gaps)
                 point[j] = queue[taken]
                 taken += 1
-            else:  # idle: no forcing, no contact, never at a period end
+            else:
                 point[j] = -1
-                L[_PA + j], L[_PKHM + j], L[_PNS + j] = 0.0, 0.0, np.inf
-                L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
+                _idle(L, j)
                 active -= 1
+
+
+@njit(**_JIT)
+def _idle(L, j):
+    """Lane ``j`` without a point: no forcing, no contact, never at a period end."""
+    L[_PA + j], L[_PKHM + j], L[_PNS + j], L[_PLOC + j], L[_ON + j] = 0.0, 0.0, np.inf, 1.0, 0.0
+    L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
 
 
 @njit(**_JIT)
