@@ -83,13 +83,13 @@ LANES = 16  # points stepped together by one thread
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
 # Rows: the state of each lane's point...
 (_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
- _SVIMP, _DV, _K, _N, _S, _C,
+ _SVIMP, _K, _N, _S, _C,
  # ... the trial step of the lane loop and the state before it ...
  _XN, _VN, _EN, _DQ, _A0, _NEED,
  # ... and the parameters the lane loop reads.
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PNS, _PLOC,
- _KSYNC) = range(0, 44 * LANES, LANES)
-_ROWS = 44
+ _KSYNC) = range(0, 43 * LANES, LANES)
+_ROWS = 43
 _SYNC = 256.0  # steps between exact resets of the forcing rotation (its rounding drifts)
 _OFF = 1e300  # moves a lane's trial value out of a running max or min
 
@@ -127,7 +127,6 @@ def _start_period(L, j):
     L[_XMAX + j], L[_XMIN + j], L[_VMAX + j], L[_VPK + j] = x, x, abs(v), abs(e)
     L[_FCP + j], L[_FC + j], L[_FCMAX + j] = fc, fc, fc
     L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
-    L[_DV + j] = -L[_PIRC + j] * e - L[_PTHC + j] * v
     L[_S + j], L[_C + j] = 0.0, 1.0
     L[_KSYNC + j] = _SYNC
 
@@ -176,7 +175,8 @@ def _commit_steps(L, contact):
         g, h, ca, sa = L[_PG + j], L[_PH + j], L[_PCA + j], L[_PSA + j]
         s0, c0 = L[_S + j], L[_C + j]
         sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
-        dvn = -L[_PIRC + j] * en - L[_PTHC + j] * vn
+        irc, thc = L[_PIRC + j], L[_PTHC + j]
+        dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
         d = max(xn - g, 0.0)
         fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0) if contact else 0.0
         fc, fcp = L[_FC + j], L[_FCP + j]
@@ -185,7 +185,7 @@ def _commit_steps(L, contact):
         predict = (not located) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
         switch = located & (((xn > g) & (1.0 + ch * vn > 0.0)) != (on == 1.0))
         touch = (not located) & (x <= g) & (xn > g)
-        need = (switch | touch | (v * vn <= 0.0) | (L[_DV + j] * dvn <= 0.0)
+        need = (switch | touch | (v * vn <= 0.0) | (dv * dvn <= 0.0)
                 | (L[_FINE + j] > 0.0)
                 | (located & (on == 1.0) & (v < 0.0) & (x - g < -3.0 * h * v))
                 | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)) | (L[_K + j] + 1.0 >= L[_PNS + j])
@@ -193,22 +193,19 @@ def _commit_steps(L, contact):
                 | predict)
         # A lane marked _NEED keeps its state, for _finish_step to redo the step from it
         # (the trial stays in the trial rows); its trial values are kept out of the running
-        # sums, maxima and minima without branches.
+        # sum and maximum without branches. The extrema of x, V and F_c need no running
+        # value here: with the sign of v, of dV/dt and of dF_c/dt kept, the samples are
+        # monotonic, so the largest lies at either end of a run of plain steps, where
+        # _finish_step takes it.
         off = 1.0 if need else 0.0
         L[_NEED + j] = off
         L[_X + j], L[_V + j], L[_E + j] = x if need else xn, v if need else vn, e if need else en
-        L[_DV + j] = L[_DV + j] if need else dvn
         L[_FCP + j], L[_FC + j] = fcp if need else fc, fc if need else fcn
         L[_S + j] = s0 if need else sm * ca + cmid * sa
         L[_C + j] = c0 if need else cmid * ca - sm * sa
         L[_Q + j] += (1.0 - off) * dq
         L[_K + j] += 1.0 - off
-        L[_XMAX + j] = max(L[_XMAX + j], xn - _OFF * off)
-        L[_XMIN + j] = min(L[_XMIN + j], xn + _OFF * off)
         L[_VMAX + j] = max(L[_VMAX + j], abs(vn) - _OFF * off)
-        L[_VPK + j] = max(L[_VPK + j], abs(en) - _OFF * off)
-        if contact:  # (else fcn = 0 and the maximum, which starts at a force, is >= 0)
-            L[_FCMAX + j] = max(L[_FCMAX + j], fcn - _OFF * off)
 
 
 @njit(**_JIT)
@@ -262,7 +259,7 @@ def _finish_step(L, j):
         xn, vn, en, dq = _rk4_pieces(x, v, e, 0.0, 1.0, _EQUAL, False, k, n_steps, h, A, wn2,
                                      cm, thm, on * khm, g, ch, irc, thc)
         fine = max(fine - 1.0, 0.0)
-    dv, dvn = L[_DV + j], -irc * en - thc * vn
+    dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
     if v > 0.0 >= vn or v < 0.0 <= vn:
         xe = _hermite_extremum(x, v, xn, vn, h)
         L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], xe), min(L[_XMIN + j], xe)
@@ -275,13 +272,14 @@ def _finish_step(L, j):
         a = 0.5 * (fcp + fcn) - fc
         b = 0.5 * (fcn - fcp)
         L[_FCMAX + j] = max(L[_FCMAX + j], fc - b * b / (4.0 * a))
-    L[_X + j], L[_V + j], L[_E + j], L[_DV + j] = xn, vn, en, dvn
+    L[_X + j], L[_V + j], L[_E + j] = xn, vn, en
     L[_FCP + j], L[_FC + j] = fc, fcn
     L[_ON + j], L[_CH + j], L[_FINE + j] = on, ch, fine
     L[_Q + j] += dq
-    L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], xn), min(L[_XMIN + j], xn)
-    L[_VMAX + j], L[_VPK + j] = max(L[_VMAX + j], abs(vn)), max(L[_VPK + j], abs(en))
-    L[_FCMAX + j] = max(L[_FCMAX + j], fcn)
+    # both ends of the step: the ends of the runs of plain steps (see _commit_steps)
+    L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], x, xn), min(L[_XMIN + j], x, xn)
+    L[_VMAX + j], L[_VPK + j] = max(L[_VMAX + j], abs(vn)), max(L[_VPK + j], abs(e), abs(en))
+    L[_FCMAX + j] = max(L[_FCMAX + j], fc, fcn)
     s0, c0, ca, sa = L[_S + j], L[_C + j], L[_PCA + j], L[_PSA + j]
     sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
     L[_S + j], L[_C + j] = sm * ca + cmid * sa, cmid * ca - sm * sa
