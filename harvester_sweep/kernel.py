@@ -303,10 +303,14 @@ def _orbit_period(ring, acc, gaps, n, ring_len, tol, v_per_x, e_per_x):
     """
     row = n % _GAP_HISTORY
     found = 0
+    xs, vs, es = 0.0, 0.0, 0.0  # amplitudes over the last `period` periods, grown with it
     for period in range(1, min(n, MAX_ORBIT_PERIOD) + 1):
-        e = _gap(ring, acc, n, period, ring_len, v_per_x, e_per_x)
+        slot = (n - period) % MAX_ORBIT_PERIOD
+        xs = max(xs, abs(acc[slot, _A_XMAX]), abs(acc[slot, _A_XMIN]))
+        vs, es = max(vs, acc[slot, _A_VMAX]), max(es, acc[slot, _A_VPK])
+        e = _gap(ring, n, period, ring_len, xs, max(vs, v_per_x * xs), max(es, e_per_x * xs))
         gaps[row, period] = e
-        if found == 0:
+        if found == 0 and e <= tol:  # (else neither test below can pass)
             rho = 0.0
             for k in range(3):
                 later = gaps[(n - k * period) % _GAP_HISTORY, period]
@@ -322,20 +326,15 @@ def _orbit_period(ring, acc, gaps, n, ring_len, tol, v_per_x, e_per_x):
     return found
 
 
-@njit(**_JIT)
-def _gap(ring, acc, n, period, ring_len, v_per_x, e_per_x):
-    """max over (x, v, V) of |y(nT) - y((n-period)T)| / amplitude over the last periods.
+@njit(inline="always", **_JIT)
+def _gap(ring, n, period, ring_len, xs, vs, es):
+    """max over (x, v, V) of |y(nT) - y((n-period)T)| / its amplitude (xs, vs, es) over the
+    last ``period`` periods.
 
-    The velocity and voltage amplitudes are floored at what the displacement amplitude
-    implies (v ~ w x, V ~ theta x / C_p), so that a component at rest (pure rounding noise)
-    does not hold the test back.
+    The caller floors the velocity and voltage amplitudes at what the displacement
+    amplitude implies (v ~ w x, V ~ theta x / C_p), so that a component at rest (pure
+    rounding noise) does not hold the test back.
     """
-    xs, vs, es = 0.0, 0.0, 0.0
-    for i in range(period):
-        slot = (n - 1 - i) % MAX_ORBIT_PERIOD
-        xs = max(xs, abs(acc[slot, _A_XMAX]), abs(acc[slot, _A_XMIN]))
-        vs, es = max(vs, acc[slot, _A_VMAX]), max(es, acc[slot, _A_VPK])
-    vs, es = max(vs, v_per_x * xs), max(es, e_per_x * xs)
     a, b = ring[n % ring_len], ring[(n - period) % ring_len]
     e = 0.0
     if xs > 0.0:

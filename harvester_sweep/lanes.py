@@ -78,6 +78,7 @@ from .kernel import (
 _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 LANES = 16  # points stepped together by one thread
+GROUP = 4  # lanes of one vector (AVX2); _lane_steps writes out LANES // GROUP = 4 groups
 
 # The lane table is one flat array of rows of LANES values; a row's constant offset lets
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
@@ -132,31 +133,45 @@ def _start_period(L, j):
 
 
 @njit(**_JIT)
-def _lane_steps(L):
-    """One plain RK4 step of every lane, in two branch-free loops that LLVM vectorizes.
+def _lane_steps(L, groups):
+    """One plain RK4 step of the lanes of the first ``groups`` groups, branch-free so that
+    LLVM vectorizes it.
 
-    The first loop runs the RK4 stages into trial rows; its iterations are long chains of
-    dependent operations, kept short so that the processor overlaps several. The second
-    commits. When no lane is in contact, the stages are compiled without the contact
-    force (no square roots): the same bits as the full code, whose force is 0 there.
-    Lanes whose step needs more (a contact switch, graded sub-steps near a touch or a
-    separation, an extremum to place, a force peak, the end of a period) are marked in
-    _NEED and left for :func:`_finish_step`; the others are committed here.
+    The RK4 stages run group by group into trial rows: a group is one vector of GROUP
+    lanes, written out with constant bounds so that it compiles to vector code only, and a
+    group with no lane in contact runs code without the contact force (no square roots),
+    which gives the same bits as the full code, whose force is 0 there. A second loop
+    commits. Lanes whose step needs more (a contact switch, graded sub-steps near a touch
+    or a separation, an extremum to place, a force peak, the end of a period) are marked
+    in _NEED and left for :func:`_finish_step`; the others are committed here.
     """
+    _trial_group(L, 0)
+    if groups > 1:
+        _trial_group(L, GROUP)
+    if groups > 2:
+        _trial_group(L, 2 * GROUP)
+    if groups > 3:
+        _trial_group(L, 3 * GROUP)
     touching = 0.0
     for j in range(LANES):
         touching += L[_ON + j]
     if touching == 0.0:
-        _trial_steps(L, False)
         _commit_steps(L, False)
     else:
-        _trial_steps(L, True)
         _commit_steps(L, True)
 
 
 @njit(inline="always", **_JIT)
-def _trial_steps(L, contact):
-    for j in range(LANES):
+def _trial_group(L, j0):
+    if L[_ON + j0] + L[_ON + j0 + 1] + L[_ON + j0 + 2] + L[_ON + j0 + 3] == 0.0:
+        _trial_steps(L, j0, False)
+    else:
+        _trial_steps(L, j0, True)
+
+
+@njit(inline="always", **_JIT)
+def _trial_steps(L, j0, contact):
+    for j in range(j0, j0 + GROUP):
         x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
         A, ca, sa, s0, c0 = L[_PA + j], L[_PCA + j], L[_PSA + j], L[_S + j], L[_C + j]
         sm = s0 * ca + c0 * sa
@@ -357,13 +372,15 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
         point[j] = queue[taken]
         taken += 1
     active = lanes
+    groups = (lanes + GROUP - 1) // GROUP
     while active > 0:
         if n_series > 0:  # one point recorded at every step boundary
             i = int(L[_N + 0] * L[_PNS + 0] + L[_K + 0])
             if i < n_series:
                 series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
                 series[i, 3] = L[_FC + 0]
-        _lane_steps(L)
+        _lane_steps(L, groups)
+        finished = False
         for j in range(lanes):
             if L[_NEED + j] == 0.0 or point[j] < 0:
                 continue
@@ -390,6 +407,25 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
                 point[j] = -1
                 _idle(L, j)
                 active -= 1
+                finished = True
+        if finished:  # the queue is empty: move the points left to the first lanes
+            active = 0
+            for j in range(lanes):
+                if point[j] >= 0:
+                    if j != active:
+                        _move(L, j, active, ring, acc, gaps)
+                        point[active], point[j] = point[j], -1
+                    active += 1
+            groups = (active + GROUP - 1) // GROUP
+
+
+@njit(**_JIT)
+def _move(L, j, i, ring, acc, gaps):
+    """Move the point of lane ``j`` to lane ``i`` and leave lane ``j`` idle."""
+    for r in range(0, _ROWS * LANES, LANES):
+        L[r + i] = L[r + j]
+    ring[i], acc[i], gaps[i] = ring[j], acc[j], gaps[j]
+    _idle(L, j)
 
 
 @njit(**_JIT)
