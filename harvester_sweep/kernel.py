@@ -20,10 +20,12 @@ import math
 import numpy as np
 from numba import njit
 
-# Bit-for-bit reproducible whichever instructions (vector lanes or scalar) run a point:
-# no FMA contraction, no reassociation, no approximate functions. No nnan/ninf either:
+# Bit-for-bit reproducible whichever lane, vector or thread runs a point: no reassociation
+# and no approximate functions, which could let LLVM compile copies of the same code
+# differently. FMA contraction is allowed: it is decided on each expression alone, and
+# which steps run scalar code is decided by the point's own state. No nnan/ninf either:
 # the divergence check relies on isfinite.
-FASTMATH = {"nsz", "arcp"}
+FASTMATH = {"nsz", "arcp", "contract"}
 _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 # Layout of a parameter row.
@@ -142,13 +144,14 @@ def _derivatives(x, v, V, f, wn2, cm, thm, khm, g, ch, irc, thc, contact=True):
     """Acceleration [m/s^2] and dV/dt [V/s]; the contact never pulls (factor clipped at 0).
 
     ``contact=False`` (a constant at the call) leaves the contact term out of the code: the
-    same bits as khm = 0, without its square root.
+    same bits as khm = 0, without its square root. The damping term comes last, off the
+    chain of dependent operations from one RK4 stage to the next.
     """
-    a = f - cm * v - wn2 * x + thm * V
+    a = f - wn2 * x + thm * V
     if contact:
         d = max(x - g, 0.0)
         a = a - khm * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
-    return a, -irc * V - thc * v
+    return a - cm * v, -irc * V - thc * v
 
 
 @njit(**_JIT)

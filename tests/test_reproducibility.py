@@ -35,3 +35,26 @@ def test_point_independent_of_threads_and_neighbours():
         elif value is not None:
             assert results[0][0][1, i] == value, name
     np.testing.assert_array_equal(results[0][1][1], alone.state)
+
+
+def test_point_same_bits_in_every_lane():
+    """The same point in four different vectors and lanes of a queue, among other points
+    (some striking the stop, some not), on one and two threads: the same bits each time."""
+    target = resolve_parameters("paper", gap=0.8e-6, frequency=138.0)
+    others = [resolve_parameters("paper", gap=g, frequency=f)
+              for g in (0.3e-6, 2e-6, 5e-6) for f in (120.0, 135.0, 150.0, 170.0, 200.0)]
+    points = others[:]
+    slots = (0, 6, 13, 18)
+    for slot in slots:
+        points.insert(slot, target)
+    rows = np.array([kernel.pack_parameters(p) for p in points])
+    for threads in (1, 2):
+        numba.set_num_threads(threads)
+        states = np.array([kernel.initial_state(p) for p in points])
+        metrics = np.empty((len(points), kernel.NM))
+        lanes.run_points(rows, states, metrics, np.empty((len(points), 0, 3)))
+        for slot in slots[1:]:
+            np.testing.assert_array_equal(metrics[slot], metrics[slots[0]])
+            np.testing.assert_array_equal(states[slot], states[slots[0]])
+        assert metrics[slots[0], kernel.M_IMPACTS] > 0  # the contact code ran
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
