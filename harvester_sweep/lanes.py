@@ -1,17 +1,19 @@
 """Many points stepped together: the lane-blocked driver of the RK4 kernel.
 
 Each thread takes a queue of points and steps LANES of them at once. The plain RK4 step
-of every lane is one branch-free loop over the lanes, which LLVM vectorizes; the rare
-steps that need more (a contact switch to locate, graded sub-steps next to a touch or a
-separation, an extremum or a force peak to place, the end of a forcing period) are
-finished lane by lane with the scalar functions of :mod:`harvester_sweep.kernel`. A lane
-whose point is done takes the next point of the queue, so that slow points do not hold
-a block back.
+of every lane runs in branch-free loops over groups of GROUP lanes, which LLVM compiles
+to vector code; a group none of whose lanes is in contact runs code without the contact
+force. The rare steps that need more (a contact switch to locate, graded sub-steps next
+to a touch or a separation, an extremum or a force peak to place, the end of a forcing
+period) are finished lane by lane with the scalar functions of
+:mod:`harvester_sweep.kernel`. A lane whose point is done takes the next point of the
+queue, so that slow points do not hold a group back; once the queue is empty the points
+left are moved to the first lanes and an empty group is skipped.
 
-A point's result does not depend on its lane, its queue or the thread count: the lane
-loop and the scalar code are compiled without FMA contraction, reassociation or
-approximate functions, so a lane computes the same bits whichever instructions run it.
-"""
+A point's result does not depend on its lane, its queue or the thread count: every lane
+runs the same vector instructions (tests/test_reproducibility.py checks a point in
+different lanes and groups), which steps run scalar code is decided by the point's own
+state, and nothing is reassociated (see kernel.FASTMATH)."""
 
 from __future__ import annotations
 
@@ -78,7 +80,8 @@ from .kernel import (
 _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 LANES = 16  # points stepped together by one thread
-GROUP = 4  # lanes of one vector (AVX2); _lane_steps writes out LANES // GROUP = 4 groups
+GROUP = 8  # lanes that take the contact-free code together; _lane_steps writes out 2 groups
+assert LANES == 2 * GROUP
 
 # The lane table is one flat array of rows of LANES values; a row's constant offset lets
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
@@ -137,10 +140,13 @@ def _lane_steps(L, groups):
     """One plain RK4 step of the lanes of the first ``groups`` groups, branch-free so that
     LLVM vectorizes it.
 
-    The RK4 stages run group by group into trial rows: a group is one vector of GROUP
-    lanes, written out with constant bounds so that it compiles to vector code only, and a
-    group with no lane in contact runs code without the contact force (no square roots),
-    which gives the same bits as the full code, whose force is 0 there. A second loop
+    The RK4 stages run group by group into trial rows: a group is GROUP lanes (two AVX2
+    vectors), written out with constant bounds so that it compiles to vector code only,
+    and a group with no lane in contact runs code without the contact force (no square
+    roots), which gives the same bits as the full code, whose force is 0 there. Two
+    groups rather than one block of LANES, because a block is more often in contact;
+    not four groups of one vector, because a loop of two vectors lets the processor
+    overlap their chains of dependent operations. A second loop
     commits. Lanes whose step needs more (a contact switch, graded sub-steps near a touch
     or a separation, an extremum to place, a force peak, the end of a period) are marked
     in _NEED and left for :func:`_finish_step`; the others are committed here.
@@ -148,10 +154,6 @@ def _lane_steps(L, groups):
     _trial_group(L, 0)
     if groups > 1:
         _trial_group(L, GROUP)
-    if groups > 2:
-        _trial_group(L, 2 * GROUP)
-    if groups > 3:
-        _trial_group(L, 3 * GROUP)
     touching = 0.0
     for j in range(LANES):
         touching += L[_ON + j]
@@ -163,7 +165,10 @@ def _lane_steps(L, groups):
 
 @njit(inline="always", **_JIT)
 def _trial_group(L, j0):
-    if L[_ON + j0] + L[_ON + j0 + 1] + L[_ON + j0 + 2] + L[_ON + j0 + 3] == 0.0:
+    touching = 0.0
+    for j in range(j0, j0 + GROUP):
+        touching += L[_ON + j]
+    if touching == 0.0:
         _trial_steps(L, j0, False)
     else:
         _trial_steps(L, j0, True)
