@@ -132,7 +132,7 @@ def _start_period(L, j):
     L[_FCP + j], L[_FC + j], L[_FCMAX + j] = fc, fc, fc
     L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
     L[_S + j], L[_C + j] = 0.0, 1.0
-    L[_KSYNC + j] = _SYNC
+    L[_KSYNC + j] = min(_SYNC, L[_PNS + j])  # the next step to stop at: a resync or the end
 
 
 @njit(**_JIT)
@@ -189,28 +189,39 @@ def _trial_steps(L, j0, contact):
 
 @njit(inline="always", **_JIT)
 def _commit_steps(L, contact):
+    """Commit the trial step of every lane that needs nothing more (see _lane_steps).
+
+    With ``contact=False`` no lane is in contact: every lane locates its switches (plain
+    fixed steps keep the contact on), the force is 0 and stays so, and neither the force
+    peak nor the approach to a separation needs looking at.
+    """
     for j in range(LANES):
-        x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
+        x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
         xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
-        g, h, ca, sa = L[_PG + j], L[_PH + j], L[_PCA + j], L[_PSA + j]
+        g, ca, sa = L[_PG + j], L[_PCA + j], L[_PSA + j]
         s0, c0 = L[_S + j], L[_C + j]
         sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
         irc, thc = L[_PIRC + j], L[_PTHC + j]
         dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
-        d = max(xn - g, 0.0)
-        fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0) if contact else 0.0
-        fc, fcp = L[_FC + j], L[_FCP + j]
-        located = L[_PLOC + j] != 0.0
-        # plain fixed steps with a latched law predict the approach velocity: in scalar
-        predict = (not located) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
-        switch = located & (((xn > g) & (1.0 + ch * vn > 0.0)) != (on == 1.0))
-        touch = (not located) & (x <= g) & (xn > g)
-        need = (switch | touch | (v * vn <= 0.0) | (dv * dvn <= 0.0)
-                | (L[_FINE + j] > 0.0)
-                | (located & (on == 1.0) & (v < 0.0) & (x - g < -3.0 * h * v))
-                | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)) | (L[_K + j] + 1.0 >= L[_PNS + j])
-                | (L[_K + j] + 1.0 >= L[_KSYNC + j])
-                | predict)
+        need = ((v * vn <= 0.0) | (dv * dvn <= 0.0) | (L[_FINE + j] > 0.0)
+                | (L[_K + j] + 1.0 >= L[_KSYNC + j]))
+        if contact:
+            on, h = L[_ON + j], L[_PH + j]
+            d = max(xn - g, 0.0)
+            fcn = on * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + ch * vn, 0.0)
+            fc, fcp = L[_FC + j], L[_FCP + j]
+            located = L[_PLOC + j] != 0.0
+            # plain fixed steps with a latched law predict the approach velocity: in scalar
+            predict = (not located) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
+            switch = located & (((xn > g) & (1.0 + ch * vn > 0.0)) != (on == 1.0))
+            touch = (not located) & (x <= g) & (xn > g)
+            need = (need | switch | touch | predict
+                    | (located & (on == 1.0) & (v < 0.0) & (x - g < -3.0 * h * v))
+                    | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)))
+            L[_FCP + j], L[_FC + j] = fcp if need else fc, fc if need else fcn
+        else:  # (the force rows stay as they are: 0, or the last force of a contact,
+            # which the touch step, never a plain one, shifts out)
+            need = need | ((xn > g) & (1.0 + ch * vn > 0.0))
         # A lane marked _NEED keeps its state, for _finish_step to redo the step from it
         # (the trial stays in the trial rows); its trial values are kept out of the running
         # sum and maximum without branches. The extrema of x, V and F_c need no running
@@ -220,7 +231,6 @@ def _commit_steps(L, contact):
         off = 1.0 if need else 0.0
         L[_NEED + j] = off
         L[_X + j], L[_V + j], L[_E + j] = x if need else xn, v if need else vn, e if need else en
-        L[_FCP + j], L[_FC + j] = fcp if need else fc, fc if need else fcn
         L[_S + j] = s0 if need else sm * ca + cmid * sa
         L[_C + j] = c0 if need else cmid * ca - sm * sa
         L[_Q + j] += (1.0 - off) * dq
@@ -304,10 +314,11 @@ def _finish_step(L, j):
     sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
     L[_S + j], L[_C + j] = sm * ca + cmid * sa, cmid * ca - sm * sa
     L[_K + j] += 1.0
-    if L[_K + j] >= L[_KSYNC + j]:  # the rotation back on the exact phase 2 pi k / N
-        phase = 2.0 * math.pi * L[_K + j] / L[_PNS + j]
-        L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
-        L[_KSYNC + j] += _SYNC
+    if L[_K + j] >= L[_KSYNC + j]:
+        if L[_K + j] < L[_PNS + j]:  # the rotation back on the exact phase 2 pi k / N
+            phase = 2.0 * math.pi * L[_K + j] / L[_PNS + j]
+            L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
+        L[_KSYNC + j] = min(L[_KSYNC + j] + _SYNC, L[_PNS + j])
 
 
 @njit(**_JIT)
