@@ -92,9 +92,10 @@ assert LANES == 2 * GROUP
  _XN, _VN, _EN, _DQ, _A0, _NEED,
  # ... and the parameters the lane loop reads.
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PNS, _PLOC,
- _KSYNC) = range(0, 43 * LANES, LANES)
-_ROWS = 43
-_SYNC = 256.0  # steps between exact resets of the forcing rotation (its rounding drifts)
+ _KSYNC, _LIVE) = range(0, 44 * LANES, LANES)
+_ROWS = 44
+_SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
+# drifts); it is reset at every step finished in scalar code, a few times per period
 _OFF = 1e300  # moves a lane's trial value out of a running max or min
 
 
@@ -116,7 +117,7 @@ def _load(L, j, p, y):
     g = p[P_G]
     L[_X + j], L[_V + j], L[_E + j], L[_VIMP + j], L[_CH + j] = x, v, e, vimp, ch
     L[_ON + j] = 1.0 if p[P_LOCATE] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
-    L[_FINE + j] = 0.0
+    L[_FINE + j], L[_LIVE + j] = 0.0, 1.0
     L[_K + j], L[_N + j] = 0.0, 0.0
     _start_period(L, j)
 
@@ -149,7 +150,8 @@ def _lane_steps(L, groups):
     overlap their chains of dependent operations. A second loop
     commits. Lanes whose step needs more (a contact switch, graded sub-steps near a touch
     or a separation, an extremum to place, a force peak, the end of a period) are marked
-    in _NEED and left for :func:`_finish_step`; the others are committed here.
+    in _NEED and left for :func:`_finish_step`; the others are committed here. Returns
+    the number of lanes marked.
     """
     _trial_group(L, 0)
     if groups > 1:
@@ -158,9 +160,8 @@ def _lane_steps(L, groups):
     for j in range(LANES):
         touching += L[_ON + j]
     if touching == 0.0:
-        _commit_steps(L, False)
-    else:
-        _commit_steps(L, True)
+        return _commit_steps(L, False)
+    return _commit_steps(L, True)
 
 
 @njit(inline="always", **_JIT)
@@ -193,8 +194,10 @@ def _commit_steps(L, contact):
 
     With ``contact=False`` no lane is in contact: every lane locates its switches (plain
     fixed steps keep the contact on), the force is 0 and stays so, and neither the force
-    peak nor the approach to a separation needs looking at.
+    peak nor the approach to a separation needs looking at. Returns the number of lanes
+    with a point (not idle) marked _NEED.
     """
+    marked = 0
     for j in range(LANES):
         x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
         xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
@@ -236,6 +239,8 @@ def _commit_steps(L, contact):
         L[_Q + j] += (1.0 - off) * dq
         L[_K + j] += 1.0 - off
         L[_VMAX + j] = max(L[_VMAX + j], abs(vn) - _OFF * off)
+        marked += 1 if need & (L[_LIVE + j] > 0.0) else 0
+    return marked
 
 
 @njit(**_JIT)
@@ -313,12 +318,12 @@ def _finish_step(L, j):
     s0, c0, ca, sa = L[_S + j], L[_C + j], L[_PCA + j], L[_PSA + j]
     sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
     L[_S + j], L[_C + j] = sm * ca + cmid * sa, cmid * ca - sm * sa
-    L[_K + j] += 1.0
-    if L[_K + j] >= L[_KSYNC + j]:
-        if L[_K + j] < L[_PNS + j]:  # the rotation back on the exact phase 2 pi k / N
-            phase = 2.0 * math.pi * L[_K + j] / L[_PNS + j]
-            L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
-        L[_KSYNC + j] = min(L[_KSYNC + j] + _SYNC, L[_PNS + j])
+    k = L[_K + j] + 1.0
+    L[_K + j] = k
+    if k < L[_PNS + j]:  # the rotation back on the exact phase 2 pi k / N, at every stop
+        phase = 2.0 * math.pi * k / L[_PNS + j]
+        L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
+    L[_KSYNC + j] = min(k + _SYNC, L[_PNS + j])
 
 
 @njit(**_JIT)
@@ -395,7 +400,8 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
             if i < n_series:
                 series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
                 series[i, 3] = L[_FC + 0]
-        _lane_steps(L, groups)
+        if _lane_steps(L, groups) == 0:
+            continue
         finished = False
         for j in range(lanes):
             if L[_NEED + j] == 0.0 or point[j] < 0:
@@ -448,7 +454,7 @@ def _move(L, j, i, ring, acc, gaps):
 def _idle(L, j):
     """Lane ``j`` without a point: no forcing, no contact, never at a period end."""
     L[_PA + j], L[_PKHM + j], L[_PNS + j], L[_PLOC + j], L[_ON + j] = 0.0, 0.0, np.inf, 1.0, 0.0
-    L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
+    L[_X + j], L[_V + j], L[_E + j], L[_LIVE + j] = 0.0, 1.0, 1.0, 0.0
 
 
 @njit(**_JIT)
