@@ -1,0 +1,121 @@
+"""The speed benchmark's one table: every figure of test_speed.py, ratios taken in this run.
+
+    python -m pytest benchmarks/test_speed.py              # about 2 minutes
+    python -m pytest benchmarks/test_speed.py --million    # and the 1e6-point sweep (~30 min)
+
+The tests put their figures in ``FIGURES``; at the end of the session the table is printed
+and written to ``benchmarks/results/speed.md`` (when every benchmark ran).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+FIGURES: dict = {}
+FLOPS_PER_STEP = 100  # one RK4 step of this system, counted by hand (4 stages + update)
+
+
+def pytest_addoption(parser):
+    parser.addoption("--million", action="store_true",
+                     help="also run the one-million-point 4-D sweep (about 30 minutes)")
+
+
+@pytest.fixture(scope="session")
+def figures() -> dict:
+    return FIGURES
+
+
+def cpu() -> dict:
+    """CPU model, cores, clock [Hz], double-precision flops per cycle per core and peak."""
+    text = Path("/proc/cpuinfo").read_text()
+    lines = text.splitlines()
+    model = next((line.split(":", 1)[1].strip() for line in lines
+                  if line.startswith("model name")), platform.processor())
+    mhz = max(float(line.split(":", 1)[1]) for line in lines if line.startswith("cpu MHz"))
+    flags = next(line for line in lines if line.startswith("flags")).split()
+    width = 8 if "avx512f" in flags else 4 if "avx" in flags else 2
+    per_cycle = width * 2 * (2 if "fma" in flags else 1)  # two FMA pipes, an FMA counts 2
+    cores = len(os.sched_getaffinity(0))
+    return {"model": model, "cores": cores, "clock": mhz * 1e6, "per_cycle": per_cycle,
+            "simd": "AVX-512" if width == 8 else "AVX2" if width == 4 else "SSE2",
+            "peak": cores * mhz * 1e6 * per_cycle}
+
+
+def _table(f: dict) -> str:
+    c = cpu()
+    import numba
+
+    def share(rate):
+        return f"{100 * rate * FLOPS_PER_STEP / c['peak']:.1f} % of peak"
+
+    rows = [
+        "# Speed of the sweep engine",
+        "",
+        f"- command: `python -m pytest benchmarks/test_speed.py"
+        f"{' --million' if 'million_wall' in f else ''}`; {time.strftime('%Y-%m-%d %H:%M')}",
+        f"- machine: {c['model']}, {c['cores']} cores at {c['clock'] / 1e9:.2f} GHz, {c['simd']}, "
+        f"{c['per_cycle']} DP flops/cycle/core: peak {c['peak'] / 1e9:.0f} GFLOP/s; "
+        f"numba {numba.__version__}, {numba.get_num_threads()} threads"
+        f" ({numba.threading_layer() if hasattr(numba, 'threading_layer') else ''})",
+        "- the steps/s share of peak counts ~100 flops per RK4 step",
+        "",
+        "| measure | value | |",
+        "| --- | ---: | --- |",
+    ]
+    if "sweep_rate" in f:
+        rows += [
+            f"| 64 x 64 gap x frequency sweep of the paper scene, 1024 steps/period, end to end "
+            f"(run_sweep to netCDF) | {f['sweep_wall']:.2f} s | {f['sweep_steps']:.3g} RK4 steps |",
+            f"| ... RK4 steps per second | {f['sweep_rate'] / 1e6:.0f} M/s | "
+            f"{share(f['sweep_rate'])} |",
+        ]
+    if "free_rate" in f:
+        rows.append(f"| the same grid with the stop out of reach (gap 1 m): steps per second | "
+                    f"{f['free_rate'] / 1e6:.0f} M/s | with contact: "
+                    f"{100 * f['sweep_rate'] / f['free_rate']:.0f} % of this |")
+    if "engine_point" in f:
+        n, periods = f["ensemble"], f["periods"]
+        rows.append(f"| paper scene from rest to steady state ({periods} periods), ensemble of "
+                    f"{n}: engine per point | {f['engine_point'] * 1e3:.3f} ms | final-state "
+                    f"error {f['engine_error']:.1e} |")
+        for key, name in (("lsoda", "SciPy LSODA, one point"),
+                          ("diffrax", f"JAX/diffrax Tsit5 vmap x{n}")):
+            if key in f:
+                t, how = f[key], f[key + "_how"]
+                rows.append(f"| {name} at the engine's error ({how}) | {t * 1e3:.2f} ms | "
+                            f"**{t / f['engine_point']:.0f} x** the engine |")
+            elif key + "_skipped" in f:
+                rows.append(f"| {name} | skipped | {f[key + '_skipped']} |")
+    if "cold_start" in f:
+        rows.append(f"| one-point sweep in a new process, on-disk cache warm "
+                    f"(`harvester-sweep run`, best of 3) | {f['cold_start']:.2f} s | |")
+    if "million_wall" in f:
+        rows.append(f"| 1e6-point gap x frequency x resistance x restitution sweep "
+                    f"(examples/million_points.toml, automatic step) | "
+                    f"{f['million_wall'] / 60:.1f} min | peak memory "
+                    f"{f['million_rss'] / 2**30:.2f} GiB; {f['million_settled']} settled |")
+    return "\n".join(rows) + "\n"
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    if not FIGURES:
+        return
+    text = _table(FIGURES)
+    terminalreporter.write_sep("=", "speed of the sweep engine")
+    terminalreporter.write(text)
+    complete = all(k in FIGURES for k in ("sweep_rate", "free_rate", "engine_point", "lsoda",
+                                          "cold_start"))
+    if complete and exitstatus == 0:
+        out = ROOT / "benchmarks" / "results" / "speed.md"
+        out.write_text(text)
+        terminalreporter.write(f"written: {out.relative_to(ROOT)}\n")

@@ -1,0 +1,198 @@
+"""Speed of the sweep engine, end to end, against what a user would otherwise pick.
+
+    python -m pytest benchmarks/test_speed.py [--million]
+
+pytest-benchmark times each case (its own table); conftest.py prints the figures in one
+table, every ratio taken within this run, and writes benchmarks/results/speed.md.
+
+- a 64 x 64 gap x frequency sweep of the paper scene at 1024 steps per period, through
+  ``run_sweep`` (steady-state detection, contact location, metrics, netCDF): RK4 steps per
+  second and share of the CPU's double-precision peak; the same grid with the stop out of
+  reach, to show what the contact points cost the others;
+- per point at matched error: the paper scene from rest to steady state for an ensemble of
+  64 copies (the engine's lanes, a diffrax ``vmap``) against SciPy LSODA; the final state
+  is compared with tests/reference.py, and each alternative's time is interpolated
+  (log-log, between the two tolerances that bracket it) to the engine's error;
+- a new process running a one-point sweep with the on-disk cache warm;
+- with ``--million``: the 1e6-point 4-D sweep of examples/million_points.toml, its wall
+  time and peak memory.
+"""
+
+from __future__ import annotations
+
+import math
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
+from reference import Reference
+
+import harvester_sweep as hs
+from harvester_sweep import kernel, lanes
+
+ROOT = Path(__file__).resolve().parents[1]
+ENSEMBLE = 64
+GRID = {"gap": {"start": 0.25e-6, "stop": 4e-6, "num": 64},
+        "frequency": {"start": 100, "stop": 250, "num": 64}}
+
+
+def _sweep(grid: dict, output: Path):
+    spec = {"preset": "paper", "parameters": {"steps_per_period": 1024}, "grid": grid,
+            "sweep": {"outputs": ["power", "v_peak", "x_max", "orbit_period"],
+                      "error_estimate": "none"}}
+    return hs.run_sweep(spec, output, progress=False)
+
+
+def _rate(benchmark, grid, tmp_path) -> tuple[float, float, int]:
+    _sweep({"gap": [1e-6], "frequency": [140.0]}, None)  # compile or load the cache
+    timing = {}
+
+    def run():
+        start = time.perf_counter()
+        ds = _sweep(grid, tmp_path / "sweep.nc")
+        timing["wall"] = time.perf_counter() - start
+        return ds
+
+    ds = benchmark.pedantic(run, rounds=1, iterations=1)
+    assert int((ds.status == 2).sum()) == 0
+    steps = int(ds.periods_run.sum()) * 1024
+    return steps / timing["wall"], timing["wall"], steps
+
+
+def test_sweep_64x64(benchmark, figures, tmp_path):
+    rate, wall, steps = _rate(benchmark, GRID, tmp_path)
+    figures.update(sweep_rate=rate, sweep_wall=wall, sweep_steps=steps)
+
+
+def test_sweep_64x64_stop_out_of_reach(benchmark, figures, tmp_path):
+    grid = {"gap": {"start": 1.0, "stop": 1.1, "num": 64}, "frequency": GRID["frequency"]}
+    figures["free_rate"] = _rate(benchmark, grid, tmp_path)[0]
+
+
+@pytest.fixture(scope="module")
+def paper():
+    """The paper scene, the periods the engine takes to settle and the reference state."""
+    scene = hs.run_scene("paper")
+    p, periods = scene.parameters, scene.metrics["periods_run"]
+    exact = Reference(p).integrate(np.zeros(3), 0.0, periods / p["frequency"])[0][:3]
+    return p, periods, exact
+
+
+def _error(state, exact) -> float:
+    """max over (x, v, V) of |state - reference| / (1e-6 m, 1e-2 m/s, 1e-5 V)."""
+    return float(np.max(np.abs(np.asarray(state)[:3] - exact) / ATOL_SCALE))
+
+
+def test_engine_per_point(benchmark, figures, paper):
+    p, periods, exact = paper
+    rows = np.repeat(kernel.pack_parameters(p)[None, :], ENSEMBLE, axis=0)
+    rest = np.repeat(kernel.initial_state(p)[None, :], ENSEMBLE, axis=0)
+    metrics = np.empty((ENSEMBLE, kernel.NM))
+    strobes = np.empty((ENSEMBLE, 0, 3))
+    lanes.warm_up()
+    out = {}
+
+    def run():
+        states = rest.copy()
+        start = time.perf_counter()
+        lanes.run_points(rows, states, metrics, strobes)
+        out["wall"], out["states"] = time.perf_counter() - start, states
+
+    benchmark.pedantic(run, rounds=3, iterations=1)
+    assert np.all(metrics[:, kernel.M_PERIODS] == periods)
+    assert np.all(out["states"] == out["states"][0])  # every lane the same bits
+    figures.update(engine_point=out["wall"] / ENSEMBLE, engine_error=_error(out["states"][0],
+                                                                            exact),
+                   ensemble=ENSEMBLE, periods=periods)
+
+
+def _matched(points: list[tuple[float, float, float]], target: float) -> tuple[float, str]:
+    """Time [s] at the error ``target``, log-log interpolated between (rtol, time, error)
+    points that bracket it; the closest point when none does."""
+    points = sorted(points, key=lambda point: point[2])
+    for (r1, t1, e1), (r2, t2, e2) in zip(points, points[1:]):
+        if e1 <= target <= e2 and e1 > 0:
+            s = math.log(target / e1) / math.log(e2 / e1) if e2 != e1 else 0.0
+            return (math.exp(math.log(t1) + s * math.log(t2 / t1)),
+                    f"rtol {r2:g} -> {e2:.1e} in {t2 * 1e3:.3g} ms, {r1:g} -> {e1:.1e} in "
+                    f"{t1 * 1e3:.3g} ms")
+    r, t, e = min(points, key=lambda point: abs(math.log(point[2] / target)))
+    return t, f"closest: rtol {r:g}, error {e:.1e}"
+
+
+def test_lsoda_per_point(benchmark, figures, paper):
+    p, periods, exact = paper
+    points = []
+
+    def run():
+        points.clear()
+        for rtol in (1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
+            seconds, state = lsoda(p, periods, rtol)
+            points.append((rtol, seconds, _error(state, exact)))
+
+    benchmark.pedantic(run, rounds=1, iterations=1)
+    figures["lsoda"], figures["lsoda_how"] = _matched(points, figures["engine_error"])
+
+
+def test_diffrax_per_point(benchmark, figures, paper):
+    p, periods, exact = paper
+    try:
+        diffrax_ensemble(p, periods, ENSEMBLE, 1e-6)  # compile
+    except ImportError as missing:
+        figures["diffrax_skipped"] = str(missing)
+        pytest.skip(str(missing))
+    points = []
+
+    def run():
+        points.clear()
+        for rtol in (1e-8, 1e-9, 1e-10, 1e-11):
+            seconds, states = diffrax_ensemble(p, periods, ENSEMBLE, rtol)
+            points.append((rtol, seconds, _error(states[ENSEMBLE // 2], exact)))
+
+    benchmark.pedantic(run, rounds=1, iterations=1)
+    figures["diffrax"], figures["diffrax_how"] = _matched(points, figures["engine_error"])
+
+
+def _cli(args: list[str]) -> None:
+    subprocess.run([sys.executable, "-m", "harvester_sweep.cli", *args], check=True)
+
+
+def test_one_point_sweep_in_a_new_process(benchmark, figures, tmp_path):
+    sweep = tmp_path / "one.toml"
+    sweep.write_text('preset = "paper"\n[grid]\nfrequency = [140.0]\n')
+    args = ["run", str(sweep), "--output", str(tmp_path / "one.nc"), "--quiet"]
+    _cli(args)  # the on-disk cache warm
+    times = []
+
+    def run():
+        start = time.perf_counter()
+        _cli(args)
+        times.append(time.perf_counter() - start)
+
+    benchmark.pedantic(run, rounds=3, iterations=1)
+    figures["cold_start"] = min(times)
+
+
+def test_million_points(benchmark, figures, tmp_path, request):
+    if not request.config.getoption("--million"):
+        pytest.skip("the 1e6-point sweep takes about 30 minutes: pass --million")
+    import xarray as xr
+
+    output = tmp_path / "million.nc"
+
+    def run():
+        start = time.perf_counter()
+        _cli(["run", str(ROOT / "examples" / "million_points.toml"), "--output", str(output),
+              "--quiet"])
+        figures["million_wall"] = time.perf_counter() - start
+
+    benchmark.pedantic(run, rounds=1, iterations=1)
+    figures["million_rss"] = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+    with xr.open_dataset(output) as ds:
+        assert ds.power.size == 1_000_000
+        figures["million_settled"] = int((ds.status == 0).sum())
