@@ -234,16 +234,17 @@ def _rk4_pieces(x, v, V, start, length, pieces, reverse, k, n_steps, h, A, wn2, 
     w = math.pi / n_steps
     q = 0.0
     at = start
+    f0 = A * math.sin(w * (2 * k + 2 * at))
     n = pieces.shape[0]
     for i in range(n):
         piece = pieces[n - 1 - i] if reverse else pieces[i]
         dt = piece * length
-        x, v, V, dq, _ = _rk4(x, v, V, dt * h, A * math.sin(w * (2 * k + 2 * at)),
-                              A * math.sin(w * (2 * k + 2 * at + dt)),
-                              A * math.sin(w * (2 * k + 2 * (at + dt))),
+        f1 = A * math.sin(w * (2 * k + 2 * (at + dt)))  # (the next piece's f0, same bits)
+        x, v, V, dq, _ = _rk4(x, v, V, dt * h, f0, A * math.sin(w * (2 * k + 2 * at + dt)), f1,
                               wn2, cm, thm, khm, g, ch, irc, thc)
         q += dq
         at += dt
+        f0 = f1
     return x, v, V, q
 
 
@@ -272,9 +273,10 @@ def _switch_step(x, v, V, a0, xn, vn, Vn, on, k, n_steps, h, A, wn2, cm, thm, kh
     if kind == 0:  # no sign change in the step: the state was already across at its start
         theta = 0.0
     khm_old = on * khm
+    f0 = A * math.sin(w * 2 * k)
     for _ in range(3):  # Newton on the sub-step length
         dt = theta * h
-        xe, ve, Ve, _, _ = _rk4(x, v, V, dt, A * math.sin(w * 2 * k),
+        xe, ve, Ve, _, _ = _rk4(x, v, V, dt, f0,
                                 A * math.sin(w * (2 * k + theta)),
                                 A * math.sin(w * (2 * k + 2 * theta)),
                                 wn2, cm, thm, khm_old, g, ch, irc, thc)
