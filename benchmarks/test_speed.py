@@ -10,9 +10,10 @@ table, every ratio taken within this run, and writes benchmarks/results/speed.md
   second and share of the CPU's double-precision peak; the same grid with the stop out of
   reach, to show what the contact points cost the others;
 - per point at matched error: the paper scene from rest to steady state for an ensemble of
-  64 copies (the engine's lanes, a diffrax ``vmap``) against SciPy LSODA; the final state
-  is compared with tests/reference.py, and each alternative's time is interpolated
-  (log-log, between the two tolerances that bracket it) to the engine's error;
+  64 copies (the engine's lanes, a diffrax ``vmap``) against SciPy LSODA, at the engine's
+  default accuracy (1e-7) and at 1e-5; the final state is compared with
+  tests/reference.py, and each alternative's time is interpolated (log-log, between the
+  two tolerances that bracket it) to the engine's error;
 - a new process running a one-point sweep with the on-disk cache warm;
 - with ``--million``: the 1e6-point 4-D sweep of examples/million_points.toml, its wall
   time and peak memory.
@@ -27,6 +28,7 @@ import sys
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 from alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
@@ -74,10 +76,14 @@ def test_sweep_64x64_stop_out_of_reach(benchmark, figures, tmp_path):
     figures["free_rate"] = _rate(benchmark, grid, tmp_path)[0]
 
 
-@pytest.fixture(scope="module")
-def paper():
-    """The paper scene, the periods the engine takes to settle and the reference state."""
-    scene = hs.run_scene("paper")
+ACCURACIES = (1e-7, 1e-5)  # the engine's default, and an engineering accuracy
+
+
+@pytest.fixture(scope="module", params=ACCURACIES, ids=lambda a: f"accuracy={a:g}")
+def paper(request):
+    """The paper scene at an accuracy, the periods the engine takes to settle from rest and
+    the reference state after them."""
+    scene = hs.run_scene("paper", accuracy=request.param)
     p, periods = scene.parameters, scene.metrics["periods_run"]
     exact = Reference(p).integrate(np.zeros(3), 0.0, periods / p["frequency"])[0][:3]
     return p, periods, exact
@@ -89,26 +95,36 @@ def _error(state, exact) -> float:
 
 
 def test_engine_per_point(benchmark, figures, paper):
+    """The engine on all cores (its default) and on one (numba.set_num_threads(1)), as
+    SciPy and XLA run these baselines on one core."""
     p, periods, exact = paper
     rows = np.repeat(kernel.pack_parameters(p)[None, :], ENSEMBLE, axis=0)
     rest = np.repeat(kernel.initial_state(p)[None, :], ENSEMBLE, axis=0)
     metrics = np.empty((ENSEMBLE, kernel.NM))
     strobes = np.empty((ENSEMBLE, 0, 3))
     lanes.warm_up()
-    out = {}
+    threads = numba.get_num_threads()
+    times, out = {}, {}
 
     def run():
-        states = rest.copy()
-        start = time.perf_counter()
-        lanes.run_points(rows, states, metrics, strobes)
-        out["wall"], out["states"] = time.perf_counter() - start, states
+        for n in sorted({threads, 1}):
+            numba.set_num_threads(n)
+            states = rest.copy()
+            start = time.perf_counter()
+            lanes.run_points(rows, states, metrics, strobes)
+            times.setdefault(n, []).append(time.perf_counter() - start)
+            assert np.all(states == states[0])  # every lane the same bits
+            out[n] = states
+        numba.set_num_threads(threads)
 
-    benchmark.pedantic(run, rounds=3, iterations=1)
+    benchmark.pedantic(run, rounds=5, iterations=1)
     assert np.all(metrics[:, kernel.M_PERIODS] == periods)
-    assert np.all(out["states"] == out["states"][0])  # every lane the same bits
-    figures.update(engine_point=out["wall"] / ENSEMBLE, engine_error=_error(out["states"][0],
-                                                                            exact),
-                   ensemble=ENSEMBLE, periods=periods)
+    assert np.array_equal(out[1], out[threads])  # and on any thread count
+    figures["ensemble"] = ENSEMBLE
+    figures.setdefault("points", {})[p["accuracy"]] = {
+        "engine": min(times[threads]) / ENSEMBLE, "engine_1": min(times[1]) / ENSEMBLE,
+        "threads": threads, "error": _error(out[1][0], exact), "periods": periods,
+        "steps": p["steps_per_period"]}
 
 
 def _matched(points: list[tuple[float, float, float]], target: float) -> tuple[float, str]:
@@ -119,7 +135,7 @@ def _matched(points: list[tuple[float, float, float]], target: float) -> tuple[f
         if e1 <= target <= e2 and e1 > 0:
             s = math.log(target / e1) / math.log(e2 / e1) if e2 != e1 else 0.0
             return (math.exp(math.log(t1) + s * math.log(t2 / t1)),
-                    f"rtol {r2:g} -> {e2:.1e} in {t2 * 1e3:.3g} ms, {r1:g} -> {e1:.1e} in "
+                    f"rtol {r2:g}: {e2:.1e} in {t2 * 1e3:.3g} ms; {r1:g}: {e1:.1e} in "
                     f"{t1 * 1e3:.3g} ms")
     r, t, e = min(points, key=lambda point: abs(math.log(point[2] / target)))
     return t, f"closest: rtol {r:g}, error {e:.1e}"
@@ -131,12 +147,13 @@ def test_lsoda_per_point(benchmark, figures, paper):
 
     def run():
         points.clear()
-        for rtol in (1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
+        for rtol in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
             seconds, state = lsoda(p, periods, rtol)
             points.append((rtol, seconds, _error(state, exact)))
 
     benchmark.pedantic(run, rounds=1, iterations=1)
-    figures["lsoda"], figures["lsoda_how"] = _matched(points, figures["engine_error"])
+    row = figures["points"][p["accuracy"]]
+    row["lsoda"], row["lsoda_how"] = _matched(points, row["error"])
 
 
 def test_diffrax_per_point(benchmark, figures, paper):
@@ -150,12 +167,13 @@ def test_diffrax_per_point(benchmark, figures, paper):
 
     def run():
         points.clear()
-        for rtol in (1e-8, 1e-9, 1e-10, 1e-11):
+        for rtol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
             seconds, states = diffrax_ensemble(p, periods, ENSEMBLE, rtol)
             points.append((rtol, seconds, _error(states[ENSEMBLE // 2], exact)))
 
     benchmark.pedantic(run, rounds=1, iterations=1)
-    figures["diffrax"], figures["diffrax_how"] = _matched(points, figures["engine_error"])
+    row = figures["points"][p["accuracy"]]
+    row["diffrax"], row["diffrax_how"] = _matched(points, row["error"])
 
 
 def _cli(args: list[str]) -> None:
