@@ -103,8 +103,9 @@ def _table(f: dict) -> str:
         rows.append(f"| one-point sweep in a new process, on-disk cache warm "
                     f"(`harvester-sweep run`, best of 3) | {f['cold_start']:.2f} s | |")
     if "million_wall" in f:
+        day = time.strftime("%Y-%m-%d")
         rows.append(f"| 1e6-point gap x frequency x resistance x restitution sweep "
-                    f"(examples/million_points.toml, automatic step; run {time.strftime('%Y-%m-%d')}"
+                    f"(examples/million_points.toml, automatic step; run {day}"
                     f") | {f['million_wall'] / 60:.1f} min | peak memory "
                     f"{f['million_rss'] / 2**30:.2f} GiB; {f['million_settled']} settled |")
     else:  # (about 20 minutes, so not every run: the last measured, with its date)

@@ -147,11 +147,10 @@ def _lane_steps(L, groups):
     roots), which gives the same bits as the full code, whose force is 0 there. Two
     groups rather than one block of LANES, because a block is more often in contact;
     not four groups of one vector, because a loop of two vectors lets the processor
-    overlap their chains of dependent operations. A second loop
-    commits. Lanes whose step needs more (a contact switch, graded sub-steps near a touch
-    or a separation, an extremum to place, a force peak, the end of a period) are marked
-    in _NEED and left for :func:`_finish_step`; the others are committed here. Returns
-    the number of lanes marked.
+    overlap their chains of dependent operations. A second loop commits: lanes whose
+    step needs more (a contact switch, graded sub-steps near a touch or a separation, an
+    extremum to place, a force peak, the end of a period) are marked in _NEED and left
+    for :func:`_finish_step`. Returns the number of lanes with a point marked.
     """
     _trial_group(L, 0)
     if groups > 1:
