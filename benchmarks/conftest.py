@@ -56,8 +56,9 @@ def _table(f: dict) -> str:
     c = cpu()
     import numba
 
-    def share(rate):
-        return f"{100 * rate * FLOPS_PER_STEP / c['peak']:.1f} % of peak"
+    def share(rate, cores=None):
+        peak = c["peak"] / c["cores"] * (cores or c["cores"])
+        return f"{100 * rate * FLOPS_PER_STEP / peak:.1f} % of peak"
 
     rows = [
         "# Speed of the sweep engine",
@@ -84,6 +85,11 @@ def _table(f: dict) -> str:
         rows.append(f"| the same grid with the stop out of reach (gap 1 m): steps per second | "
                     f"{f['free_rate'] / 1e6:.0f} M/s | with contact: "
                     f"{100 * f['sweep_rate'] / f['free_rate']:.0f} % of this |")
+    if "loop_free" in f:
+        rows.append(f"| the vector loop alone, one core, lane-steps per second: no lane in contact "
+                    f"/ all in contact | {f['loop_free'] / 1e6:.0f} M/s / "
+                    f"{f['loop_contact'] / 1e6:.0f} M/s | {share(f['loop_free'], 1)} of one core "
+                    f"(no contact) |")
     n = f.get("ensemble")
     for accuracy, row in sorted(f.get("points", {}).items(), reverse=True):
         rows.append(f"| paper scene from rest to steady state ({row['periods']} periods x "

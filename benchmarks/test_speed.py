@@ -76,6 +76,40 @@ def test_sweep_64x64_stop_out_of_reach(benchmark, figures, tmp_path):
     figures["free_rate"] = _rate(benchmark, grid, tmp_path)[0]
 
 
+@numba.njit(fastmath=kernel.FASTMATH, error_model="numpy")
+def _lane_loop(L, steps):
+    """``steps`` plain steps of the lane loop alone (no scalar finishing, no period ends)."""
+    for _ in range(steps):
+        lanes._lane_steps(L, lanes.LANES // lanes.GROUP)
+        for j in range(lanes.LANES):
+            L[lanes._K + j] = 1.0  # never at a stop
+
+
+def test_lane_loop_alone(benchmark, figures):
+    """What one core does in the vector loop alone: lanes of the paper scene kept off the
+    stop (the contact-free code) and kept in contact (the full code)."""
+    numba_threads = numba.get_num_threads()
+    rates = {}
+    for touching in (0.0, 1.0):
+        L = np.zeros(lanes._ROWS * lanes.LANES)
+        for j in range(lanes.LANES):
+            p = hs.resolve_parameters("paper", steps_per_period=1024, frequency=100.0 + 5 * j)
+            lanes._load(L, j, kernel.pack_parameters(p), kernel.initial_state(p))
+            L[lanes._ON + j] = touching
+        _lane_loop(L, 10)
+        steps = 200_000
+
+        def run(L=L):
+            start = time.perf_counter()
+            _lane_loop(L, steps)
+            rates.setdefault(touching, []).append(lanes.LANES * steps
+                                                  / (time.perf_counter() - start))
+
+        benchmark.pedantic(run, rounds=3, iterations=1) if touching else run()
+    assert numba.get_num_threads() == numba_threads
+    figures.update(loop_free=max(rates[0.0]), loop_contact=max(rates[1.0]))
+
+
 ACCURACIES = (1e-7, 1e-5)  # the engine's default, and an engineering accuracy
 
 
