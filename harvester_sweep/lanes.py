@@ -504,3 +504,34 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     _run_queue(row[None, :], state.copy()[None, :], np.empty((1, NM)), np.empty((1, 0, 3)),
                series, False, np.zeros(1, dtype=np.int64))
     return series
+
+
+def _flush_if_kernel_changed() -> None:
+    """Drop this module's cached machine code when kernel.py has changed since it was cached.
+
+    numba's on-disk cache checks only the stamp of the file that defines a function, but
+    the functions here inline kernel.py's: after an edit of kernel.py alone (an editable
+    install), they would run the old kernel. A hash of kernel.py is kept next to the cache.
+    """
+    from hashlib import sha256
+    from pathlib import Path
+
+    from . import kernel
+
+    cache = getattr(_run_queues, "_cache", None)
+    if cache is None or not hasattr(cache, "cache_path"):
+        return
+    stamp = sha256(Path(kernel.__file__).read_bytes()).hexdigest()
+    marker = Path(cache.cache_path) / "lanes.kernel-sha256"
+    try:
+        if marker.exists() and marker.read_text() == stamp:
+            return
+        for value in globals().values():
+            if isinstance(value, numba.core.registry.CPUDispatcher):
+                value._cache.flush()
+        marker.write_text(stamp)
+    except OSError:  # an unwritable cache: numba recompiles or falls back by itself
+        pass
+
+
+_flush_if_kernel_changed()
