@@ -65,14 +65,24 @@ def main(argv=None) -> int:
     try:
         if args.command == "parameters":
             return _print_parameters()
-        if args.command == "run":
-            return _run(args)
         if args.command == "plot":
             return _plot(args)
+        if not (args.command == "run" and args.quiet):
+            _announce_compilation()
+        if args.command == "run":
+            return _run(args)
         return _scene(args)
     except ParameterError as error:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
         return EXIT_USER_ERROR
+
+
+def _announce_compilation() -> None:
+    from . import lanes
+
+    if not lanes.cache_warm():
+        print("harvester-sweep: compiling the RK4 kernel into numba's on-disk cache (first "
+              "run only, about 30 s)", file=sys.stderr, flush=True)
 
 
 def _scene(args) -> int:

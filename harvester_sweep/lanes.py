@@ -18,6 +18,7 @@ state, and nothing is reassociated (see kernel.FASTMATH)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -491,6 +492,17 @@ def warm_up() -> None:
     run_points(np.zeros((0, NP)), np.zeros((0, 4)), np.zeros((0, NM)), np.zeros((0, 0, 3)))
 
 
+def cache_warm() -> bool:
+    """Whether :func:`run_points` is in numba's on-disk cache; if not, its first call
+    compiles the kernel (about 30 s)."""
+    if _FLUSHED:
+        return False
+    try:
+        return Path(_run_queues._cache._cache_file._index_path).exists()
+    except AttributeError:  # another numba's internals: say nothing
+        return True
+
+
 def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarray:
     """(x, v, V, F_c) at every step over ``periods`` forcing periods from ``state``.
 
@@ -506,6 +518,9 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     return series
 
 
+_FLUSHED: list = []  # not empty once the cache was flushed by this process
+
+
 def _flush_if_kernel_changed() -> None:
     """Drop this module's cached machine code when kernel.py has changed since it was cached.
 
@@ -514,7 +529,6 @@ def _flush_if_kernel_changed() -> None:
     install), they would run the old kernel. A hash of kernel.py is kept next to the cache.
     """
     from hashlib import sha256
-    from pathlib import Path
 
     from . import kernel
 
@@ -530,6 +544,7 @@ def _flush_if_kernel_changed() -> None:
             if isinstance(value, numba.core.registry.CPUDispatcher):
                 value._cache.flush()
         marker.write_text(stamp)
+        _FLUSHED.append(True)
     except OSError:  # an unwritable cache: numba recompiles or falls back by itself
         pass
 
