@@ -250,12 +250,13 @@ def _finish_step(L, j):
     xn, vn, en, dq, a0 = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j], L[_A0 + j]
     A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
     g, irc, thc, h, latch = L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_PH + j], L[_PCHL + j]
-    k, n_steps = int(L[_K + j]), int(L[_PNS + j])
+    n_steps = L[_PNS + j]
+    s0, c0 = L[_S + j], L[_C + j]  # the forcing phase at the start of the step
     fine = L[_FINE + j]
     if L[_PLOC + j] == 0.0:
         if latch > 0.0 and x <= g and v > 0.0:  # predicted approach velocity: redo the step
             ch = latch / v
-            s0, c0, ca, sa = L[_S + j], L[_C + j], L[_PCA + j], L[_PSA + j]
+            ca, sa = L[_PCA + j], L[_PSA + j]
             sm = s0 * ca + c0 * sa
             s1 = sm * ca + (c0 * ca - s0 * sa) * sa
             xn, vn, en, dq, a0 = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm,
@@ -268,11 +269,11 @@ def _finish_step(L, j):
                 L[_VIMP + j] = v_on
                 ch = latch / v_on
     elif (xn > g and 1.0 + ch * vn > 0.0) != (on == 1.0):
-        kind, theta = _switch_step(x, v, e, a0, xn, vn, en, on, k, n_steps, h, A, wn2, cm, thm,
-                                   khm, g, ch, irc, thc)
+        kind, theta = _switch_step(x, v, e, a0, xn, vn, en, on, s0, c0, n_steps, h, A, wn2, cm,
+                                   thm, khm, g, ch, irc, thc)
         # Up to the switch with the old contact state (graded towards a separation)...
         xe, ve, ee, q1 = _rk4_pieces(
-            x, v, e, 0.0, theta, _GRADED if on == 1.0 and kind == 1 else _WHOLE, True, k,
+            x, v, e, 0.0, theta, _GRADED if on == 1.0 and kind == 1 else _WHOLE, True, s0, c0,
             n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
         onset = on == 0.0 and kind == 1
         if onset:
@@ -284,15 +285,15 @@ def _finish_step(L, j):
         on = 1.0 - on
         # ... and after it with the new one (graded from a touch).
         xn, vn, en, q2 = _rk4_pieces(xe, ve, ee, theta, 1.0 - theta, _GRADED if onset else _WHOLE,
-                                     False, k, n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc,
-                                     thc)
+                                     False, s0, c0, n_steps, h, A, wn2, cm, thm, on * khm, g,
+                                     ch, irc, thc)
         dq = q1 + q2
         fine = 3.0 if onset else 0.0
     elif fine > 0.0 or (on == 1.0 and v < 0.0 and x - g < -3.0 * h * v):
         # The steps just after a touch or before a separation still see the
         # (t - t_0)^1.5 force: quarter steps there.
-        xn, vn, en, dq = _rk4_pieces(x, v, e, 0.0, 1.0, _EQUAL, False, k, n_steps, h, A, wn2,
-                                     cm, thm, on * khm, g, ch, irc, thc)
+        xn, vn, en, dq = _rk4_pieces(x, v, e, 0.0, 1.0, _EQUAL, False, s0, c0, n_steps, h, A,
+                                     wn2, cm, thm, on * khm, g, ch, irc, thc)
         fine = max(fine - 1.0, 0.0)
     dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
     if v > 0.0 >= vn or v < 0.0 <= vn:
@@ -315,15 +316,13 @@ def _finish_step(L, j):
     L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], x, xn), min(L[_XMIN + j], x, xn)
     L[_VMAX + j], L[_VPK + j] = max(L[_VMAX + j], abs(vn)), max(L[_VPK + j], abs(e), abs(en))
     L[_FCMAX + j] = max(L[_FCMAX + j], fc, fcn)
-    s0, c0, ca, sa = L[_S + j], L[_C + j], L[_PCA + j], L[_PSA + j]
-    sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
-    L[_S + j], L[_C + j] = sm * ca + cmid * sa, cmid * ca - sm * sa
     k = L[_K + j] + 1.0
     L[_K + j] = k
-    if k < L[_PNS + j]:  # the rotation back on the exact phase 2 pi k / N, at every stop
-        phase = 2.0 * math.pi * k / L[_PNS + j]
+    if k < n_steps:  # the forcing phase of the next step, exact (the rotation drifts)
+        phase = 2.0 * math.pi * k / n_steps
         L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
-    L[_KSYNC + j] = min(k + _SYNC, L[_PNS + j])
+    # (at k = n_steps the period ends and _start_period sets the phase to 0)
+    L[_KSYNC + j] = min(k + _SYNC, n_steps)
 
 
 @njit(**_JIT)
