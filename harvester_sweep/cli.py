@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from .parameters import PARAMETERS, PRESETS, ParameterError, parse_assignment
+from .parameters import PARAMETERS, PRESETS, ParameterError, parse_assignment, resolve_parameters
 
 EXIT_USER_ERROR = 2
 EXIT_DIVERGED = 3
@@ -67,8 +67,6 @@ def main(argv=None) -> int:
             return _print_parameters()
         if args.command == "plot":
             return _plot(args)
-        if not (args.command == "run" and args.quiet):
-            _announce_compilation()
         if args.command == "run":
             return _run(args)
         return _scene(args)
@@ -92,6 +90,8 @@ def _scene(args) -> int:
     for path, suffixes in ((args.plot, (".png", ".pdf", ".svg")), (args.output, (".nc",))):
         if path is not None and not path.lower().endswith(suffixes):
             raise ParameterError(f"{path!r}: the file name must end in {' or '.join(suffixes)}")
+    resolve_parameters(args.preset, **overrides)  # bad input: one line, before anything else
+    _announce_compilation()
     result = run_scene(args.preset, **overrides)
     metrics = result.metrics
     if args.json:
@@ -129,8 +129,12 @@ def _check_suffix(path: str, suffixes: tuple) -> None:
 
 def _run(args) -> int:
     from .sweep import run_sweep
+    from .sweep_file import load_sweep
 
     _check_suffix(args.output, (".nc",))
+    load_sweep(args.sweep_file)  # bad input: one line, before anything else
+    if not args.quiet:
+        _announce_compilation()
     try:
         ds = run_sweep(args.sweep_file, args.output, resume=args.resume,
                        progress=not args.quiet, workers=args.workers, scheduler=args.scheduler)
