@@ -88,16 +88,16 @@ assert LANES == 2 * GROUP
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
 # Rows: the state of each lane's point...
 (_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
- _SVIMP, _K, _N, _S, _C,
- # ... the trial step of the lane loop and the state before it ...
+ _SVIMP, _K, _KSYNC, _N, _S, _C,
+ # ... the trial step of the lane loop and whether a lane needs scalar work ...
  _XN, _VN, _EN, _DQ, _A0, _NEED,
- # ... and the parameters the lane loop reads.
+ # ... and the parameters the lane loop reads (_LIVE: 1 with a point, 0 idle).
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PNS, _PLOC,
- _KSYNC, _LIVE) = range(0, 44 * LANES, LANES)
+ _LIVE) = range(0, 44 * LANES, LANES)
 _ROWS = 44
 _SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
 # drifts); it is reset at every step finished in scalar code, a few times per period
-_OFF = 1e300  # moves a lane's trial value out of a running max or min
+_OFF = 1e300  # moves a marked lane's trial value out of the running maximum of |v|
 
 
 @njit(**_JIT)
