@@ -26,6 +26,9 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from reference import Reference, lankarani_nikravesh_damping  # noqa: E402
+
 ATOL_SCALE = np.array([1e-6, 1e-2, 1e-5])  # x [m], v [m/s], V [V]: atol = rtol * ATOL_SCALE
 INSTALL_HINT = 'jax and diffrax are needed for this baseline: pip install ".[bench]"'
 
@@ -41,7 +44,7 @@ def coefficients(p: dict) -> dict:
     m = p["mass"]
     ch = p.get("contact_damping")
     if ch is None:
-        ch = 3 * (1 - p["restitution"] ** 2) / (4 * p["impact_velocity"])
+        ch = lankarani_nikravesh_damping(p["restitution"], p["impact_velocity"])
     return {"m": m, "k": m * wn**2, "c": 2 * p["damping_ratio"] * m * wn,
             "w": 2 * math.pi * p["frequency"], "theta": p["coupling"],
             "Cp": p["capacitance"], "R": p["resistance"], "A": p["amplitude"],
@@ -184,10 +187,6 @@ def diffrax_ensemble(p: dict, periods: int, n_points: int, rtol: float, *, sprea
 
 def main(periods: int = 94, rtols=(1e-6, 1e-8, 1e-10), ensembles=(64, 16)) -> None:
     """Print per-point wall time [s] and final-state error of each baseline, paper scene."""
-    root = Path(__file__).resolve().parents[1]
-    sys.path.insert(0, str(root / "tests"))
-    from reference import Reference
-
     from harvester_sweep.parameters import resolve_parameters
 
     p = resolve_parameters("paper")

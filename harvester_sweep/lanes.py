@@ -153,12 +153,9 @@ def _lane_steps(L, groups):
     extremum to place, a force peak, the end of a period) are marked in _NEED and left
     for :func:`_finish_step`. Returns the number of lanes with a point marked.
     """
-    _trial_group(L, 0)
-    if groups > 1:
-        _trial_group(L, GROUP)
-    touching = 0.0
-    for j in range(LANES):
-        touching += L[_ON + j]
+    touching = _trial_group(L, 0)
+    if groups > 1:  # (else the second group is idle: no lane in contact)
+        touching += _trial_group(L, GROUP)
     if touching == 0.0:
         return _commit_steps(L, False)
     return _commit_steps(L, True)
@@ -166,6 +163,7 @@ def _lane_steps(L, groups):
 
 @njit(inline="always", **_JIT)
 def _trial_group(L, j0):
+    """The RK4 stages of group j0 (see _lane_steps); returns how many of its lanes touch."""
     touching = 0.0
     for j in range(j0, j0 + GROUP):
         touching += L[_ON + j]
@@ -173,6 +171,7 @@ def _trial_group(L, j0):
         _trial_steps(L, j0, False)
     else:
         _trial_steps(L, j0, True)
+    return touching
 
 
 @njit(inline="always", **_JIT)
