@@ -67,6 +67,7 @@ from .kernel import (
     P_WN2,
     P_XLIM,
     SETTLED,
+    _derivatives,
     _hermite_crossing_rate,
     _hermite_extremum,
     _orbit_period,
@@ -74,6 +75,7 @@ from .kernel import (
     _rk4,
     _rk4_pieces,
     _switch_step,
+    free_step_map,
 )
 
 # The kernel's flags (see kernel.FASTMATH): nsz and arcp let LLVM vectorize the lane loop,
@@ -90,11 +92,18 @@ assert LANES == 2 * GROUP
 (_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
  _SVIMP, _K, _KSYNC, _N, _S, _C,
  # ... the trial step of the lane loop and whether a lane needs scalar work ...
- _XN, _VN, _EN, _DQ, _A0, _NEED,
- # ... and the parameters the lane loop reads (_LIVE: 1 with a point, 0 idle).
- _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PNS, _PLOC,
- _LIVE) = range(0, 44 * LANES, LANES)
-_ROWS = 44
+ _XN, _VN, _EN, _DQ, _NEED, _XC, _VC, _EC, _DQC,
+ # ... the parameters the lane loop reads (_LIVE: 1 with a point, 0 idle) ...
+ _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PCB, _PSB,
+ _PNS, _PLOC, _LIVE,
+ # ... and the contact-free step as the linear map it is (kernel.free_step_map): x, v, V
+ # at its end from z = (x, v, V, sin, cos) at its start, and the stage voltages scaled
+ # so that the integral of V^2 over the step is the sum of their squares (the
+ # coefficients that are 0 whatever the parameters are left out).
+ _MXX, _MXV, _MXE, _MXS, _MXC, _MVX, _MVV, _MVE, _MVS, _MVC, _MEX, _MEV, _MEE, _MES, _MEC,
+ _Q1E, _Q2V, _Q2E, _Q3X, _Q3V, _Q3E, _Q3S, _Q4X, _Q4V, _Q4E, _Q4S, _Q4C,
+ ) = range(0, 76 * LANES, LANES)
+_ROWS = 76
 _SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
 # drifts); it is reset at every step finished in scalar code, a few times per period
 _OFF = 1e300  # moves a marked lane's trial value out of the running maximum of |v|
@@ -110,7 +119,20 @@ def _load(L, j, p, y):
     L[_PCHL + j] = p[P_LATCH]
     L[_PIRC + j], L[_PTHC + j] = p[P_IRC], p[P_THC]
     L[_PH + j] = h
-    L[_PCA + j], L[_PSA + j] = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
+    ca, sa = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
+    L[_PCA + j], L[_PSA + j] = ca, sa
+    L[_PCB + j], L[_PSB + j] = math.cos(2.0 * math.pi / n_steps), math.sin(2.0 * math.pi / n_steps)
+    m = free_step_map(h, ca, sa, p[P_A], p[P_WN2], p[P_CM], p[P_THM], p[P_IRC], p[P_THC])
+    for r, row in enumerate((_MXX, _MVX, _MEX)):
+        for c in range(5):
+            L[row + c * LANES + j] = m[r, c]
+    r1, r2 = math.sqrt(h / 6.0), math.sqrt(h / 3.0)  # the RK4 quadrature's weights
+    L[_Q1E + j] = r1
+    L[_Q2V + j], L[_Q2E + j] = r2 * m[3, 1], r2 * m[3, 2]
+    L[_Q3X + j], L[_Q3V + j], L[_Q3E + j], L[_Q3S + j] = (r2 * m[4, 0], r2 * m[4, 1],
+                                                          r2 * m[4, 2], r2 * m[4, 3])
+    for c in range(5):
+        L[_Q4X + c * LANES + j] = r1 * m[5, c]
     L[_PNS + j], L[_PLOC + j] = n_steps, p[P_LOCATE]
     x, v, e, vimp = y[0], y[1], y[2], y[3]
     latch = p[P_LATCH]
@@ -176,15 +198,37 @@ def _trial_group(L, j0):
 
 @njit(inline="always", **_JIT)
 def _trial_steps(L, j0, contact):
+    """The trial step of group j0's lanes: the contact-free map (see the rows _MXX...),
+    and with ``contact`` the RK4 stages with the contact force for the lanes in contact,
+    chosen lane by lane (a lane out of contact gets the same bits either way)."""
     for j in range(j0, j0 + GROUP):
-        x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
-        A, ca, sa, s0, c0 = L[_PA + j], L[_PCA + j], L[_PSA + j], L[_S + j], L[_C + j]
-        sm = s0 * ca + c0 * sa
-        s1 = sm * ca + (c0 * ca - s0 * sa) * sa
-        xn, vn, en, dq, a1 = _rk4(x, v, e, L[_PH + j], A * s0, A * sm, A * s1, L[_PWN2 + j],
-                                  L[_PCM + j], L[_PTHM + j], L[_ON + j] * L[_PKHM + j],
-                                  L[_PG + j], ch, L[_PIRC + j], L[_PTHC + j], contact)
-        L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j], L[_A0 + j] = xn, vn, en, dq, a1
+        x, v, e, s0, c0 = L[_X + j], L[_V + j], L[_E + j], L[_S + j], L[_C + j]
+        xn = L[_MXX + j] * x + L[_MXV + j] * v + L[_MXE + j] * e + L[_MXS + j] * s0 + L[_MXC + j] * c0
+        vn = L[_MVX + j] * x + L[_MVV + j] * v + L[_MVE + j] * e + L[_MVS + j] * s0 + L[_MVC + j] * c0
+        en = L[_MEX + j] * x + L[_MEV + j] * v + L[_MEE + j] * e + L[_MES + j] * s0 + L[_MEC + j] * c0
+        w1 = L[_Q1E + j] * e
+        w2 = L[_Q2V + j] * v + L[_Q2E + j] * e
+        w3 = L[_Q3X + j] * x + L[_Q3V + j] * v + L[_Q3E + j] * e + L[_Q3S + j] * s0
+        w4 = L[_Q4X + j] * x + L[_Q4V + j] * v + L[_Q4E + j] * e + L[_Q4S + j] * s0 + L[_Q4C + j] * c0
+        dq = w1 * w1 + w2 * w2 + w3 * w3 + w4 * w4
+        L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j] = xn, vn, en, dq
+    if contact:
+        for j in range(j0, j0 + GROUP):
+            x, v, e, s0, c0 = L[_X + j], L[_V + j], L[_E + j], L[_S + j], L[_C + j]
+            A, ca, sa = L[_PA + j], L[_PCA + j], L[_PSA + j]
+            sm = s0 * ca + c0 * sa
+            s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+            on = L[_ON + j]
+            xc, vc, ec, dqc, _ = _rk4(x, v, e, L[_PH + j], A * s0, A * sm, A * s1, L[_PWN2 + j],
+                                      L[_PCM + j], L[_PTHM + j], on * L[_PKHM + j], L[_PG + j],
+                                      L[_CH + j], L[_PIRC + j], L[_PTHC + j])
+            L[_XC + j], L[_VC + j], L[_EC + j], L[_DQC + j] = xc, vc, ec, dqc
+        for j in range(j0, j0 + GROUP):
+            free = L[_ON + j] == 0.0
+            L[_XN + j] = L[_XN + j] if free else L[_XC + j]
+            L[_VN + j] = L[_VN + j] if free else L[_VC + j]
+            L[_EN + j] = L[_EN + j] if free else L[_EC + j]
+            L[_DQ + j] = L[_DQ + j] if free else L[_DQC + j]
 
 
 @njit(inline="always", **_JIT)
@@ -200,9 +244,8 @@ def _commit_steps(L, contact):
     for j in range(LANES):
         x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
         xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
-        g, ca, sa = L[_PG + j], L[_PCA + j], L[_PSA + j]
+        g, cb, sb = L[_PG + j], L[_PCB + j], L[_PSB + j]
         s0, c0 = L[_S + j], L[_C + j]
-        sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
         irc, thc = L[_PIRC + j], L[_PTHC + j]
         dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
         need = ((v * vn <= 0.0) | (dv * dvn <= 0.0) | (L[_FINE + j] > 0.0)
@@ -233,8 +276,8 @@ def _commit_steps(L, contact):
         off = 1.0 if need else 0.0
         L[_NEED + j] = off
         L[_X + j], L[_V + j], L[_E + j] = x if need else xn, v if need else vn, e if need else en
-        L[_S + j] = s0 if need else sm * ca + cmid * sa
-        L[_C + j] = c0 if need else cmid * ca - sm * sa
+        L[_S + j] = s0 if need else s0 * cb + c0 * sb
+        L[_C + j] = c0 if need else c0 * cb - s0 * sb
         L[_Q + j] += (1.0 - off) * dq
         L[_K + j] += 1.0 - off
         L[_VMAX + j] = max(L[_VMAX + j], abs(vn) - _OFF * off)
@@ -246,7 +289,7 @@ def _commit_steps(L, contact):
 def _finish_step(L, j):
     """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)."""
     x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
-    xn, vn, en, dq, a0 = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j], L[_A0 + j]
+    xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
     A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
     g, irc, thc, h, latch = L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_PH + j], L[_PCHL + j]
     n_steps = L[_PNS + j]
@@ -258,7 +301,7 @@ def _finish_step(L, j):
             ca, sa = L[_PCA + j], L[_PSA + j]
             sm = s0 * ca + c0 * sa
             s1 = sm * ca + (c0 * ca - s0 * sa) * sa
-            xn, vn, en, dq, a0 = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm,
+            xn, vn, en, dq, _ = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm,
                                       g, ch, irc, thc)
         if x <= g < xn:  # first touch, on the cubic Hermite interpolant
             v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
@@ -268,6 +311,7 @@ def _finish_step(L, j):
                 L[_VIMP + j] = v_on
                 ch = latch / v_on
     elif (xn > g and 1.0 + ch * vn > 0.0) != (on == 1.0):
+        a0, _ = _derivatives(x, v, e, A * s0, wn2, cm, thm, on * khm, g, ch, irc, thc)
         kind, theta = _switch_step(x, v, e, a0, xn, vn, en, on, s0, c0, n_steps, h, A, wn2, cm,
                                    thm, khm, g, ch, irc, thc)
         # Up to the switch with the old contact state (graded towards a separation)...
