@@ -91,7 +91,7 @@ def test_lane_loop_alone(benchmark, figures):
     numba_threads = numba.get_num_threads()
     rates = {}
     for touching in (0.0, 1.0):
-        L = np.zeros(lanes._ROWS * lanes.LANES)
+        L = lanes._table()
         for j in range(lanes.LANES):
             p = hs.resolve_parameters("paper", steps_per_period=1024, frequency=100.0 + 5 * j)
             lanes._load(L, j, kernel.pack_parameters(p), kernel.initial_state(p))
