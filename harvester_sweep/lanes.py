@@ -83,8 +83,7 @@ from .kernel import (
 _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 LANES = 16  # points stepped together by one thread
-GROUP = 8  # lanes that take the contact-free code together; _lane_steps writes out 2 groups
-assert LANES == 2 * GROUP
+GROUP = 4  # lanes that take the contact-free code together; _lane_steps writes out 2 groups
 
 # The lane table is one flat array of rows of LANES values; a row's constant offset lets
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
@@ -187,6 +186,11 @@ def _lane_steps(L, groups):
     touching = _trial_group(L, 0)
     if groups > 1:  # (else the second group is idle: no lane in contact)
         touching += _trial_group(L, GROUP)
+    if LANES // GROUP > 2:
+        if groups > 2:
+            touching += _trial_group(L, 2 * GROUP)
+        if groups > 3:
+            touching += _trial_group(L, 3 * GROUP)
     if touching == 0.0:
         return _commit_steps(L, False)
     return _commit_steps(L, True)
