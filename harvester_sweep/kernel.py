@@ -297,6 +297,12 @@ def _rk4_pieces(x, v, V, start, length, pieces, reverse, s0, c0, n_steps, h, A, 
     return x, v, V, q
 
 
+# Newton on a switch stops once its correction to the switch time is below this fraction
+# of a step: the switch is then placed within about 1e-20 of a step (quadratic
+# convergence), and the last sub-step, which ends there, is kept.
+_THETA_TOL = 1e-10
+
+
 @njit(**_JIT)
 def _switch_step(x, v, V, a0, xn, vn, Vn, on, s0, c0, n_steps, h, A, wn2, cm, thm, khm, g,
                  ch, irc, thc):
@@ -324,12 +330,13 @@ def _switch_step(x, v, V, a0, xn, vn, Vn, on, s0, c0, n_steps, h, A, wn2, cm, th
         theta = 0.0
     khm_old = on * khm
     f0 = A * s0
+    xe, ve, Ve, qe = x, v, V, 0.0
     for _ in range(3):  # Newton on the sub-step length
         dt = theta * h
-        xe, ve, Ve, _, _ = _rk4(x, v, V, dt, f0,
-                                _forcing(A, s0, c0, w * theta),
-                                _forcing(A, s0, c0, 2.0 * w * theta),
-                                wn2, cm, thm, khm_old, g, ch, irc, thc)
+        xe, ve, Ve, qe, _ = _rk4(x, v, V, dt, f0,
+                                 _forcing(A, s0, c0, w * theta),
+                                 _forcing(A, s0, c0, 2.0 * w * theta),
+                                 wn2, cm, thm, khm_old, g, ch, irc, thc)
         if kind == 1:
             residual, rate = xe - g, ve
         elif kind == 2:
@@ -338,9 +345,13 @@ def _switch_step(x, v, V, a0, xn, vn, Vn, on, s0, c0, n_steps, h, A, wn2, cm, th
             residual, rate = 1.0 + ch * ve, ch * ae
         else:
             break
-        if rate != 0.0:
-            theta = min(max(theta - residual / (rate * h), 0.0), 1.0)
-    return kind, theta
+        if rate == 0.0:
+            break
+        step = residual / (rate * h)
+        if abs(step) <= _THETA_TOL:  # converged: theta stays, and so does its sub-step
+            return kind, theta, True, xe, ve, Ve, qe
+        theta = min(max(theta - step, 0.0), 1.0)
+    return kind, theta, False, xe, ve, Ve, qe
 
 
 @njit(**_JIT)

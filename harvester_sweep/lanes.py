@@ -324,12 +324,16 @@ def _finish_step(L, j):
                 ch = latch / v_on
     elif (xn > g and 1.0 + ch * vn > 0.0) != (on == 1.0):
         a0, _ = _derivatives(x, v, e, A * s0, wn2, cm, thm, on * khm, g, ch, irc, thc)
-        kind, theta = _switch_step(x, v, e, a0, xn, vn, en, on, s0, c0, n_steps, h, A, wn2, cm,
-                                   thm, khm, g, ch, irc, thc)
-        # Up to the switch with the old contact state (graded towards a separation)...
-        xe, ve, ee, q1 = _rk4_pieces(
-            x, v, e, 0.0, theta, _GRADED if on == 1.0 and kind == 1 else _WHOLE, True, s0, c0,
-            n_steps, h, A, wn2, cm, thm, on * khm, g, ch, irc, thc)
+        kind, theta, done, xe, ve, ee, q1 = _switch_step(
+            x, v, e, a0, xn, vn, en, on, s0, c0, n_steps, h, A, wn2, cm, thm, khm, g, ch, irc,
+            thc)
+        # Up to the switch with the old contact state (graded towards a separation; else
+        # one sub-step, Newton's last when it converged)...
+        graded = on == 1.0 and kind == 1
+        if graded or not done:
+            xe, ve, ee, q1 = _rk4_pieces(x, v, e, 0.0, theta, _GRADED if graded else _WHOLE,
+                                         True, s0, c0, n_steps, h, A, wn2, cm, thm, on * khm,
+                                         g, ch, irc, thc)
         onset = on == 0.0 and kind == 1
         if onset:
             L[_NIMP + j] += 1.0
