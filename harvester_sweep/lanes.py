@@ -75,6 +75,7 @@ from .kernel import (
     _rk4,
     _rk4_pieces,
     _switch_step,
+    _v2_integral,
     free_step_map,
 )
 
@@ -83,7 +84,8 @@ from .kernel import (
 _JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy")
 
 LANES = 16  # points stepped together by one thread
-GROUP = 4  # lanes that take the contact-free code together; _lane_steps writes out 2 groups
+GROUP = 8  # lanes that take the contact-free code together; _lane_steps writes out 2 groups
+assert LANES == 2 * GROUP
 
 # The lane table is one flat array of rows of LANES values; a row's constant offset lets
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
@@ -91,18 +93,15 @@ GROUP = 4  # lanes that take the contact-free code together; _lane_steps writes 
 (_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
  _SVIMP, _K, _KSYNC, _N, _S, _C,
  # ... the trial step of the lane loop and whether a lane needs scalar work ...
- _XN, _VN, _EN, _DQ, _NEED, _XC, _VC, _EC, _DQC,
+ _XN, _VN, _EN, _NEED, _XC, _VC, _EC,
  # ... the parameters the lane loop reads (_LIVE: 1 with a point, 0 idle) ...
- _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PCA, _PSA, _PCB, _PSB,
- _PNS, _PLOC, _LIVE,
+ _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH26, _PCA, _PSA,
+ _PCB, _PSB, _PNS, _PLOC, _LIVE,
  # ... and the contact-free step as the linear map it is (kernel.free_step_map): x, v, V
- # at its end from z = (x, v, V, sin, cos) at its start, and the stage voltages scaled
- # so that the integral of V^2 over the step is the sum of their squares (the
- # coefficients that are 0 whatever the parameters are left out).
+ # at its end from (x, v, V, sin, cos) at its start.
  _MXX, _MXV, _MXE, _MXS, _MXC, _MVX, _MVV, _MVE, _MVS, _MVC, _MEX, _MEV, _MEE, _MES, _MEC,
- _Q1E, _Q2V, _Q2E, _Q3X, _Q3V, _Q3E, _Q3S, _Q4X, _Q4V, _Q4E, _Q4S, _Q4C,
- ) = range(0, 76 * LANES, LANES)
-_ROWS = 76
+ ) = range(0, 64 * LANES, LANES)
+_ROWS = 64
 _SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
 # drifts); it is reset at every step finished in scalar code, a few times per period
 _OFF = 1e300  # moves a marked lane's trial value out of the running maximum of |v|
@@ -126,7 +125,7 @@ def _load(L, j, p, y):
     L[_PKHM + j], L[_PKH + j], L[_PG + j] = p[P_KHM], p[P_KHM] * p[P_M], p[P_G]
     L[_PCHL + j] = p[P_LATCH]
     L[_PIRC + j], L[_PTHC + j] = p[P_IRC], p[P_THC]
-    L[_PH + j] = h
+    L[_PH + j], L[_PHH + j], L[_PH26 + j] = h, 0.5 * h, h * h / 6.0
     ca, sa = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
     L[_PCA + j], L[_PSA + j] = ca, sa
     L[_PCB + j], L[_PSB + j] = math.cos(2.0 * math.pi / n_steps), math.sin(2.0 * math.pi / n_steps)
@@ -134,13 +133,6 @@ def _load(L, j, p, y):
     for r, row in enumerate((_MXX, _MVX, _MEX)):
         for c in range(5):
             L[row + c * LANES + j] = m[r, c]
-    r1, r2 = math.sqrt(h / 6.0), math.sqrt(h / 3.0)  # the RK4 quadrature's weights
-    L[_Q1E + j] = r1
-    L[_Q2V + j], L[_Q2E + j] = r2 * m[3, 1], r2 * m[3, 2]
-    L[_Q3X + j], L[_Q3V + j], L[_Q3E + j], L[_Q3S + j] = (r2 * m[4, 0], r2 * m[4, 1],
-                                                          r2 * m[4, 2], r2 * m[4, 3])
-    for c in range(5):
-        L[_Q4X + c * LANES + j] = r1 * m[5, c]
     L[_PNS + j], L[_PLOC + j] = n_steps, p[P_LOCATE]
     x, v, e, vimp = y[0], y[1], y[2], y[3]
     latch = p[P_LATCH]
@@ -186,11 +178,6 @@ def _lane_steps(L, groups):
     touching = _trial_group(L, 0)
     if groups > 1:  # (else the second group is idle: no lane in contact)
         touching += _trial_group(L, GROUP)
-    if LANES // GROUP > 2:
-        if groups > 2:
-            touching += _trial_group(L, 2 * GROUP)
-        if groups > 3:
-            touching += _trial_group(L, 3 * GROUP)
     if touching == 0.0:
         return _commit_steps(L, False)
     return _commit_steps(L, True)
@@ -219,12 +206,7 @@ def _trial_steps(L, j0, contact):
         xn = L[_MXX + j] * x + L[_MXV + j] * v + L[_MXE + j] * e + L[_MXS + j] * s0 + L[_MXC + j] * c0
         vn = L[_MVX + j] * x + L[_MVV + j] * v + L[_MVE + j] * e + L[_MVS + j] * s0 + L[_MVC + j] * c0
         en = L[_MEX + j] * x + L[_MEV + j] * v + L[_MEE + j] * e + L[_MES + j] * s0 + L[_MEC + j] * c0
-        w1 = L[_Q1E + j] * e
-        w2 = L[_Q2V + j] * v + L[_Q2E + j] * e
-        w3 = L[_Q3X + j] * x + L[_Q3V + j] * v + L[_Q3E + j] * e + L[_Q3S + j] * s0
-        w4 = L[_Q4X + j] * x + L[_Q4V + j] * v + L[_Q4E + j] * e + L[_Q4S + j] * s0 + L[_Q4C + j] * c0
-        dq = w1 * w1 + w2 * w2 + w3 * w3 + w4 * w4
-        L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j] = xn, vn, en, dq
+        L[_XN + j], L[_VN + j], L[_EN + j] = xn, vn, en
     if contact:
         for j in range(j0, j0 + GROUP):
             x, v, e, s0, c0 = L[_X + j], L[_V + j], L[_E + j], L[_S + j], L[_C + j]
@@ -232,16 +214,15 @@ def _trial_steps(L, j0, contact):
             sm = s0 * ca + c0 * sa
             s1 = sm * ca + (c0 * ca - s0 * sa) * sa
             on = L[_ON + j]
-            xc, vc, ec, dqc, _ = _rk4(x, v, e, L[_PH + j], A * s0, A * sm, A * s1, L[_PWN2 + j],
+            xc, vc, ec, _, _ = _rk4(x, v, e, L[_PH + j], A * s0, A * sm, A * s1, L[_PWN2 + j],
                                       L[_PCM + j], L[_PTHM + j], on * L[_PKHM + j], L[_PG + j],
                                       L[_CH + j], L[_PIRC + j], L[_PTHC + j])
-            L[_XC + j], L[_VC + j], L[_EC + j], L[_DQC + j] = xc, vc, ec, dqc
+            L[_XC + j], L[_VC + j], L[_EC + j] = xc, vc, ec
         for j in range(j0, j0 + GROUP):
             free = L[_ON + j] == 0.0
             L[_XN + j] = L[_XN + j] if free else L[_XC + j]
             L[_VN + j] = L[_VN + j] if free else L[_VC + j]
             L[_EN + j] = L[_EN + j] if free else L[_EC + j]
-            L[_DQ + j] = L[_DQ + j] if free else L[_DQC + j]
 
 
 @njit(inline="always", **_JIT)
@@ -256,11 +237,12 @@ def _commit_steps(L, contact):
     marked = 0
     for j in range(LANES):
         x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
-        xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
+        xn, vn, en = L[_XN + j], L[_VN + j], L[_EN + j]
         g, cb, sb = L[_PG + j], L[_PCB + j], L[_PSB + j]
         s0, c0 = L[_S + j], L[_C + j]
         irc, thc = L[_PIRC + j], L[_PTHC + j]
         dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
+        dq = _v2_integral(e, dv, en, dvn, L[_PHH + j], L[_PH26 + j])
         need = (v * vn <= 0.0) | (dv * dvn <= 0.0) | (L[_K + j] + 1.0 >= L[_KSYNC + j])
         if contact:
             on, h = L[_ON + j], L[_PH + j]
@@ -301,12 +283,16 @@ def _commit_steps(L, contact):
 def _finish_step(L, j):
     """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)."""
     x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
-    xn, vn, en, dq = L[_XN + j], L[_VN + j], L[_EN + j], L[_DQ + j]
+    xn, vn, en = L[_XN + j], L[_VN + j], L[_EN + j]
     A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
     g, irc, thc, h, latch = L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_PH + j], L[_PCHL + j]
     n_steps = L[_PNS + j]
     s0, c0 = L[_S + j], L[_C + j]  # the forcing phase at the start of the step
     fine = L[_FINE + j]
+    # int V^2 dt over the trial step as the lane loop takes it (see _commit_steps), unless
+    # the step is redone below
+    dq = _v2_integral(e, -irc * e - thc * v, en, -irc * en - thc * vn, L[_PHH + j],
+                      L[_PH26 + j])
     if L[_PLOC + j] == 0.0:
         if latch > 0.0 and x <= g and v > 0.0:  # predicted approach velocity: redo the step
             ch = latch / v
