@@ -2,8 +2,9 @@
 
 Each thread takes a queue of points and steps LANES of them at once. The plain RK4 step
 of every lane runs in branch-free loops over groups of GROUP lanes, which LLVM compiles
-to vector code; a group none of whose lanes is in contact runs code without the contact
-force. The rare steps that need more (a contact switch to locate, graded sub-steps next
+to vector code: out of contact the step is linear, and is applied as the matrix it is
+(kernel.free_step_map); a group with a lane in contact also runs the RK4 stages with the
+contact force. The rare steps that need more (a contact switch to locate, graded sub-steps next
 to a touch or a separation, an extremum or a force peak to place, the end of a forcing
 period) are finished lane by lane with the scalar functions of
 :mod:`harvester_sweep.kernel`. A lane whose point is done takes the next point of the
@@ -128,7 +129,7 @@ def _load(L, j, p, y):
     L[_PH + j], L[_PHH + j], L[_PH26 + j] = h, 0.5 * h, h * h / 6.0
     ca, sa = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
     L[_PCA + j], L[_PSA + j] = ca, sa
-    L[_PCB + j], L[_PSB + j] = math.cos(2.0 * math.pi / n_steps), math.sin(2.0 * math.pi / n_steps)
+    L[_PCB + j], L[_PSB + j] = math.cos(2 * math.pi / n_steps), math.sin(2 * math.pi / n_steps)
     m = free_step_map(h, ca, sa, p[P_A], p[P_WN2], p[P_CM], p[P_THM], p[P_IRC], p[P_THC])
     for r, row in enumerate((_MXX, _MVX, _MEX)):
         for c in range(5):
@@ -156,7 +157,8 @@ def _start_period(L, j):
     L[_FCP + j], L[_FC + j], L[_FCMAX + j] = fc, fc, fc
     L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
     L[_S + j], L[_C + j] = 0.0, 1.0
-    L[_KSYNC + j] = min(_SYNC, L[_PNS + j])  # the next step to stop at: a resync or the end
+    # the next step to stop at: the first, in quarter steps, else a resync or the end
+    L[_KSYNC + j] = 1.0 if L[_FINE + j] > 0.0 else min(_SYNC, L[_PNS + j])
 
 
 @njit(**_JIT)
@@ -164,13 +166,14 @@ def _lane_steps(L, groups):
     """One plain RK4 step of the lanes of the first ``groups`` groups, branch-free so that
     LLVM vectorizes it.
 
-    The RK4 stages run group by group into trial rows: a group is GROUP lanes (two AVX2
-    vectors), written out with constant bounds so that it compiles to vector code only,
-    and a group with no lane in contact runs code without the contact force (no square
-    roots), which gives the same bits as the full code, whose force is 0 there. Two
-    groups rather than one block of LANES, because a block is more often in contact;
-    not four groups of one vector, because a loop of two vectors lets the processor
-    overlap their chains of dependent operations. A second loop commits: lanes whose
+    The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
+    vectors), written out with constant bounds so that it compiles to vector code only.
+    A lane out of contact steps by the RK4 step's linear map (kernel.free_step_map, 15
+    multiply-adds); a group with a lane in contact also runs the RK4 stages with the
+    contact force, and each lane takes the one that applies to it, so that a point gets
+    the same bits whatever its neighbours. Two groups rather than one block of LANES,
+    because a block is more often in contact; not four groups of one vector, which LLVM
+    does not always vectorize (a loop of 4 is unrolled). A second loop commits: lanes whose
     step needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in _NEED and left
     for :func:`_finish_step`. Returns the number of lanes with a point marked.
@@ -203,9 +206,12 @@ def _trial_steps(L, j0, contact):
     chosen lane by lane (a lane out of contact gets the same bits either way)."""
     for j in range(j0, j0 + GROUP):
         x, v, e, s0, c0 = L[_X + j], L[_V + j], L[_E + j], L[_S + j], L[_C + j]
-        xn = L[_MXX + j] * x + L[_MXV + j] * v + L[_MXE + j] * e + L[_MXS + j] * s0 + L[_MXC + j] * c0
-        vn = L[_MVX + j] * x + L[_MVV + j] * v + L[_MVE + j] * e + L[_MVS + j] * s0 + L[_MVC + j] * c0
-        en = L[_MEX + j] * x + L[_MEV + j] * v + L[_MEE + j] * e + L[_MES + j] * s0 + L[_MEC + j] * c0
+        xn = (L[_MXX + j] * x + L[_MXV + j] * v + L[_MXE + j] * e + L[_MXS + j] * s0
+              + L[_MXC + j] * c0)
+        vn = (L[_MVX + j] * x + L[_MVV + j] * v + L[_MVE + j] * e + L[_MVS + j] * s0
+              + L[_MVC + j] * c0)
+        en = (L[_MEX + j] * x + L[_MEV + j] * v + L[_MEE + j] * e + L[_MES + j] * s0
+              + L[_MEC + j] * c0)
         L[_XN + j], L[_VN + j], L[_EN + j] = xn, vn, en
     if contact:
         for j in range(j0, j0 + GROUP):
@@ -215,8 +221,8 @@ def _trial_steps(L, j0, contact):
             s1 = sm * ca + (c0 * ca - s0 * sa) * sa
             on = L[_ON + j]
             xc, vc, ec, _, _ = _rk4(x, v, e, L[_PH + j], A * s0, A * sm, A * s1, L[_PWN2 + j],
-                                      L[_PCM + j], L[_PTHM + j], on * L[_PKHM + j], L[_PG + j],
-                                      L[_CH + j], L[_PIRC + j], L[_PTHC + j])
+                                    L[_PCM + j], L[_PTHM + j], on * L[_PKHM + j], L[_PG + j],
+                                    L[_CH + j], L[_PIRC + j], L[_PTHC + j])
             L[_XC + j], L[_VC + j], L[_EC + j] = xc, vc, ec
         for j in range(j0, j0 + GROUP):
             free = L[_ON + j] == 0.0
@@ -231,8 +237,9 @@ def _commit_steps(L, contact):
 
     With ``contact=False`` no lane is in contact: every lane locates its switches (plain
     fixed steps keep the contact on), the force is 0 and stays so, and neither the force
-    peak nor the approach to a separation needs looking at. Returns the number of lanes
-    with a point (not idle) marked _NEED.
+    peak nor the approach to a separation needs looking at. The step's int V^2 dt comes
+    from its ends (kernel._v2_integral). Returns the number of lanes with a point (not
+    idle) marked _NEED.
     """
     marked = 0
     for j in range(LANES):
@@ -300,7 +307,7 @@ def _finish_step(L, j):
             sm = s0 * ca + c0 * sa
             s1 = sm * ca + (c0 * ca - s0 * sa) * sa
             xn, vn, en, dq, _ = _rk4(x, v, e, h, A * s0, A * sm, A * s1, wn2, cm, thm, khm,
-                                      g, ch, irc, thc)
+                                     g, ch, irc, thc)
         if x <= g < xn:  # first touch, on the cubic Hermite interpolant
             v_on = _hermite_crossing_rate(x, v, xn, vn, h, g)
             L[_NIMP + j] += 1.0
