@@ -95,17 +95,16 @@ assert LANES == 2 * GROUP
  _SVIMP, _K, _KSYNC, _N, _S, _C,
  # ... the trial step of the lane loop and whether a lane needs scalar work ...
  _XN, _VN, _EN, _NEED, _XC, _VC, _EC,
- # ... the parameters the lane loop reads (_LIVE: 1 with a point, 0 idle) ...
+ # ... the parameters the lane loop reads ...
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH26, _PCA, _PSA,
- _PCB, _PSB, _PNS, _PLOC, _LIVE,
+ _PCB, _PSB, _PNS, _PLOC,
  # ... and the contact-free step as the linear map it is (kernel.free_step_map): x, v, V
  # at its end from (x, v, V, sin, cos) at its start.
  _MXX, _MXV, _MXE, _MXS, _MXC, _MVX, _MVV, _MVE, _MVS, _MVC, _MEX, _MEV, _MEE, _MES, _MEC,
- ) = range(0, 64 * LANES, LANES)
-_ROWS = 64
+ ) = range(0, 63 * LANES, LANES)
+_ROWS = 63
 _SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
 # drifts); it is reset at every step finished in scalar code, a few times per period
-_OFF = 1e300  # moves a marked lane's trial value out of the running maximum of |v|
 
 
 @njit(**_JIT)
@@ -141,7 +140,7 @@ def _load(L, j, p, y):
     g = p[P_G]
     L[_X + j], L[_V + j], L[_E + j], L[_VIMP + j], L[_CH + j] = x, v, e, vimp, ch
     L[_ON + j] = 1.0 if p[P_LOCATE] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
-    L[_FINE + j], L[_LIVE + j] = 0.0, 1.0
+    L[_FINE + j] = 0.0
     L[_K + j], L[_N + j] = 0.0, 0.0
     _start_period(L, j)
 
@@ -270,10 +269,11 @@ def _commit_steps(L, contact):
             need = need | ((xn > g) & (1.0 + ch * vn > 0.0))
         # A lane marked _NEED keeps its state, for _finish_step to redo the step from it
         # (the trial stays in the trial rows); its trial values are kept out of the running
-        # sum and maximum without branches. The extrema of x, V and F_c need no running
-        # value here: with the sign of v, of dV/dt and of dF_c/dt kept, the samples are
-        # monotonic, so the largest lies at either end of a run of plain steps, where
-        # _finish_step takes it.
+        # sum without branches. The running maximum of |v| takes the step's start, a
+        # sample either way (the last of a period is taken by _finish_step). The extrema
+        # of x, V and F_c need no running value here: with the sign of v, of dV/dt and of
+        # dF_c/dt kept, the samples are monotonic, so the largest lies at either end of a
+        # run of plain steps, where _finish_step takes it.
         off = 1.0 if need else 0.0
         L[_NEED + j] = off
         L[_X + j], L[_V + j], L[_E + j] = x if need else xn, v if need else vn, e if need else en
@@ -281,8 +281,8 @@ def _commit_steps(L, contact):
         L[_C + j] = c0 if need else c0 * cb - s0 * sb
         L[_Q + j] += (1.0 - off) * dq
         L[_K + j] += 1.0 - off
-        L[_VMAX + j] = max(L[_VMAX + j], abs(vn) - _OFF * off)
-        marked += 1 if need & (L[_LIVE + j] > 0.0) else 0
+        L[_VMAX + j] = max(L[_VMAX + j], abs(v))
+        marked += 1 if need else 0
     return marked
 
 
@@ -504,9 +504,16 @@ def _move(L, j, i, ring, acc, gaps):
 
 @njit(**_JIT)
 def _idle(L, j):
-    """Lane ``j`` without a point: no forcing, no contact, never at a period end."""
+    """Lane ``j`` without a point, which the lane loop never marks: it stays at x = 0,
+    v = 1, V = 1 (its map is the identity), with dV/dt = 1 (1/(R C_p) = -1, theta/C_p =
+    0), no forcing, the stop at infinity, no contact and no period end."""
     L[_PA + j], L[_PKHM + j], L[_PNS + j], L[_PLOC + j], L[_ON + j] = 0.0, 0.0, np.inf, 1.0, 0.0
-    L[_X + j], L[_V + j], L[_E + j], L[_LIVE + j] = 0.0, 1.0, 1.0, 0.0
+    L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_KSYNC + j] = np.inf, -1.0, 0.0, np.inf
+    L[_FC + j], L[_FCP + j] = 0.0, 0.0
+    L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
+    for r in range(_MXX, _MEC + LANES, LANES):
+        L[r + j] = 0.0
+    L[_MXX + j], L[_MVV + j], L[_MEE + j] = 1.0, 1.0, 1.0
 
 
 @njit(**_JIT)
