@@ -98,8 +98,8 @@ assert LANES == 2 * GROUP
  # ... the parameters the lane loop reads ...
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH26, _PCA, _PSA,
  _PCB, _PSB, _PNS, _PLOC,
- # ... and the contact-free step as the linear map it is (kernel.free_step_map): x, v, V
- # at its end from (x, v, V, sin, cos) at its start.
+ # ... and the contact-free step as the linear map it is (kernel.free_step_map): the
+ # increments of x, v, V from (x, v, V, sin, cos) at its start.
  _MXX, _MXV, _MXE, _MXS, _MXC, _MVX, _MVV, _MVE, _MVS, _MVC, _MEX, _MEV, _MEE, _MES, _MEC,
  ) = range(0, 63 * LANES, LANES)
 _ROWS = 63
@@ -168,7 +168,7 @@ def _lane_steps(L, groups):
     The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
     vectors), written out with constant bounds so that it compiles to vector code only.
     A lane out of contact steps by the RK4 step's linear map (kernel.free_step_map, 15
-    multiply-adds); a group with a lane in contact also runs the RK4 stages with the
+    multiply-adds and 3 adds); a group with a lane in contact also runs the RK4 stages with the
     contact force, and each lane takes the one that applies to it, so that a point gets
     the same bits whatever its neighbours. Two groups rather than one block of LANES,
     because a block is more often in contact; not four groups of one vector, which LLVM
@@ -205,12 +205,12 @@ def _trial_steps(L, j0, contact):
     chosen lane by lane (a lane out of contact gets the same bits either way)."""
     for j in range(j0, j0 + GROUP):
         x, v, e, s0, c0 = L[_X + j], L[_V + j], L[_E + j], L[_S + j], L[_C + j]
-        xn = (L[_MXX + j] * x + L[_MXV + j] * v + L[_MXE + j] * e + L[_MXS + j] * s0
-              + L[_MXC + j] * c0)
-        vn = (L[_MVX + j] * x + L[_MVV + j] * v + L[_MVE + j] * e + L[_MVS + j] * s0
-              + L[_MVC + j] * c0)
-        en = (L[_MEX + j] * x + L[_MEV + j] * v + L[_MEE + j] * e + L[_MES + j] * s0
-              + L[_MEC + j] * c0)
+        xn = x + (L[_MXX + j] * x + L[_MXV + j] * v + L[_MXE + j] * e + L[_MXS + j] * s0
+                  + L[_MXC + j] * c0)
+        vn = v + (L[_MVX + j] * x + L[_MVV + j] * v + L[_MVE + j] * e + L[_MVS + j] * s0
+                  + L[_MVC + j] * c0)
+        en = e + (L[_MEX + j] * x + L[_MEV + j] * v + L[_MEE + j] * e + L[_MES + j] * s0
+                  + L[_MEC + j] * c0)
         L[_XN + j], L[_VN + j], L[_EN + j] = xn, vn, en
     if contact:
         for j in range(j0, j0 + GROUP):
@@ -505,7 +505,7 @@ def _move(L, j, i, ring, acc, gaps):
 @njit(**_JIT)
 def _idle(L, j):
     """Lane ``j`` without a point, which the lane loop never marks: it stays at x = 0,
-    v = 1, V = 1 (its map is the identity), with dV/dt = 1 (1/(R C_p) = -1, theta/C_p =
+    v = 1, V = 1 (its increments are 0), with dV/dt = 1 (1/(R C_p) = -1, theta/C_p =
     0), no forcing, the stop at infinity, no contact and no period end."""
     L[_PA + j], L[_PKHM + j], L[_PNS + j], L[_PLOC + j], L[_ON + j] = 0.0, 0.0, np.inf, 1.0, 0.0
     L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_KSYNC + j] = np.inf, -1.0, 0.0, np.inf
@@ -513,7 +513,6 @@ def _idle(L, j):
     L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
     for r in range(_MXX, _MEC + LANES, LANES):
         L[r + j] = 0.0
-    L[_MXX + j], L[_MVV + j], L[_MEE + j] = 1.0, 1.0, 1.0
 
 
 @njit(**_JIT)

@@ -29,7 +29,7 @@ def test_free_step_map_is_the_rk4_step(preset, steps):
         stages = kernel._rk4(*y, h, A * s0, A * math.sin(phi + math.pi / steps),
                              A * math.sin(phi + 2 * math.pi / steps), wn2, cm, thm, 0.0, 0.0,
                              0.0, irc, thc)[:3]
-        mapped = m @ np.array([*y, s0, c0])
+        mapped = y + m @ np.array([*y, s0, c0])
         assert np.all(np.abs(mapped - stages) <= 1e-13 * (scale + np.abs(stages))), (
             mapped, stages)
 
