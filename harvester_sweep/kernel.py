@@ -240,7 +240,7 @@ def free_step_map(h, ca, sa, A, wn2, cm, thm, irc, thc):
     it by half a step: ca, sa = cos, sin of pi / steps per period, as in the lane loop).
     Returns the 3 x 5 matrix D that gives the increments of x, v, V from z, found by
     stepping the basis vectors of z: (x, v, V) + D z is the same step as :func:`_rk4`, up
-    to rounding, for a quarter of its floating-point operations. (The increment, not the
+    to rounding, for about a third of its floating-point operations. (The increment, not the
     whole step I + D, is stored: I + D rounded once would repeat the same relative error
     of ~1e-16 at every step, a drift that grows with the number of steps.)
     """
@@ -308,8 +308,9 @@ def _rk4_pieces(x, v, V, start, length, pieces, reverse, s0, c0, n_steps, h, A, 
 
 
 # Newton on a switch stops once its correction to the switch time is below this fraction
-# of a step: the switch is then placed within about 1e-20 of a step (quadratic
-# convergence), and the last sub-step, which ends there, is kept.
+# of a step, and leaves that correction out so that its last sub-step, which ends at the
+# switch, can be kept: the switch is then off by at most 1e-10 of a step, which moves the
+# state by far less than rounding (the force is continuous across a switch).
 _THETA_TOL = 1e-10
 
 
