@@ -58,6 +58,7 @@ from scipy.optimize import brentq
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))  # this checkout's package, not an installed copy
 import numba  # noqa: E402
 from reference import Reference, lankarani_nikravesh_damping  # noqa: E402
 
