@@ -223,6 +223,8 @@ def _trial_steps(L, j0, contact):
                                     L[_PCM + j], L[_PTHM + j], on * L[_PKHM + j], L[_PG + j],
                                     L[_CH + j], L[_PIRC + j], L[_PTHC + j])
             L[_XC + j], L[_VC + j], L[_EC + j] = xc, vc, ec
+        # (chosen in a loop of its own: with the choice in the loop above, LLVM left that
+        # loop scalar)
         for j in range(j0, j0 + GROUP):
             free = L[_ON + j] == 0.0
             L[_XN + j] = L[_XN + j] if free else L[_XC + j]
