@@ -171,8 +171,9 @@ def _lane_steps(L, groups):
     multiply-adds and 3 adds); a group with a lane in contact also runs the RK4 stages with the
     contact force, and each lane takes the one that applies to it, so that a point gets
     the same bits whatever its neighbours. Two groups rather than one block of LANES,
-    because a block is more often in contact; not four groups of one vector, which LLVM
-    does not always vectorize (a loop of 4 is unrolled). A second loop commits: lanes whose
+    because a block is more often in contact; not four groups of one vector, whose
+    contact-free loop LLVM compiled to scalar code once the trial step got short. A
+    second loop commits: lanes whose
     step needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in _NEED and left
     for :func:`_finish_step`. Returns the number of lanes with a point marked.
@@ -298,10 +299,10 @@ def _finish_step(L, j):
     n_steps = L[_PNS + j]
     s0, c0 = L[_S + j], L[_C + j]  # the forcing phase at the start of the step
     fine = L[_FINE + j]
+    dv = -irc * e - thc * v  # dV/dt at the start of the step [V/s]
     # int V^2 dt over the trial step as the lane loop takes it (see _commit_steps), unless
     # the step is redone below
-    dq = _v2_integral(e, -irc * e - thc * v, en, -irc * en - thc * vn, L[_PHH + j],
-                      L[_PH26 + j])
+    dq = _v2_integral(e, dv, en, -irc * en - thc * vn, L[_PHH + j], L[_PH26 + j])
     if L[_PLOC + j] == 0.0:
         if latch > 0.0 and x <= g and v > 0.0:  # predicted approach velocity: redo the step
             ch = latch / v
@@ -349,7 +350,7 @@ def _finish_step(L, j):
         xn, vn, en, dq = _rk4_pieces(x, v, e, 0.0, 1.0, _EQUAL, False, s0, c0, n_steps, h, A,
                                      wn2, cm, thm, on * khm, g, ch, irc, thc)
         fine = max(fine - 1.0, 0.0)
-    dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
+    dvn = -irc * en - thc * vn
     if v > 0.0 >= vn or v < 0.0 <= vn:
         xe = _hermite_extremum(x, v, xn, vn, h)
         L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], xe), min(L[_XMIN + j], xe)
