@@ -7,7 +7,9 @@ to vector code: out of contact the step is linear, and is applied as the matrix 
 contact force. The rare steps that need more (a contact switch to locate, graded sub-steps next
 to a touch or a separation, an extremum or a force peak to place, the end of a forcing
 period) are finished lane by lane with the scalar functions of
-:mod:`harvester_sweep.kernel`. A lane whose point is done takes the next point of the
+:mod:`harvester_sweep.kernel`; the steps just after a touch and before a separation,
+in quarter steps, run first, in vector code on the lanes that take them, packed
+(_quarter_steps). A lane whose point is done takes the next point of the
 queue, so that slow points do not hold a group back; once the queue is empty the points
 left are moved to the first lanes and an empty group is skipped.
 
@@ -34,7 +36,6 @@ from .kernel import (
     _A_VPK,
     _A_XMAX,
     _A_XMIN,
-    _EQUAL,
     _GAP_HISTORY,
     _GRADED,
     _NA,
@@ -97,12 +98,17 @@ assert LANES == 2 * GROUP
  _XN, _VN, _EN, _NEED, _XC, _VC, _EC,
  # ... the parameters the lane loop reads ...
  _PA, _PWN2, _PCM, _PTHM, _PKHM, _PKH, _PG, _PCHL, _PIRC, _PTHC, _PH, _PHH, _PH26, _PCA, _PSA,
- _PCB, _PSB, _PNS, _PLOC,
+ _PCB, _PSB, _PCE, _PSE, _PNS, _PLOC,
  # ... and the contact-free step as the linear map it is (kernel.free_step_map): the
  # increments of x, v, V from (x, v, V, sin, cos) at its start.
  _MXX, _MXV, _MXE, _MXS, _MXC, _MVX, _MVV, _MVE, _MVS, _MVC, _MEX, _MEV, _MEE, _MES, _MEC,
- ) = range(0, 63 * LANES, LANES)
-_ROWS = 63
+ # ... and the lanes that take quarter steps, packed (_quarter_steps): their lane, state,
+ # forcing phase and parameters.
+ _QJ, _QX, _QV, _QE, _QS, _QC, _QA, _QCE, _QSE, _QDT, _QWN2, _QCM, _QTHM, _QKHM, _QG, _QCH,
+ _QIRC, _QTHC,
+ ) = range(0, 83 * LANES, LANES)
+_ROWS = 83
+_BLOCK = 4  # lanes of one vector: quarter steps run on whole blocks of packed lanes
 _SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
 # drifts); it is reset at every step finished in scalar code, a few times per period
 
@@ -129,6 +135,7 @@ def _load(L, j, p, y):
     ca, sa = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
     L[_PCA + j], L[_PSA + j] = ca, sa
     L[_PCB + j], L[_PSB + j] = math.cos(2 * math.pi / n_steps), math.sin(2 * math.pi / n_steps)
+    L[_PCE + j], L[_PSE + j] = math.cos(math.pi / (4 * n_steps)), math.sin(math.pi / (4 * n_steps))
     m = free_step_map(h, ca, sa, p[P_A], p[P_WN2], p[P_CM], p[P_THM], p[P_IRC], p[P_THC])
     for r, row in enumerate((_MXX, _MVX, _MEX)):
         for c in range(5):
@@ -176,7 +183,8 @@ def _lane_steps(L, groups):
     second loop commits: lanes whose
     step needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in _NEED and left
-    for :func:`_finish_step`. Returns the number of lanes with a point marked.
+    for :func:`_finish_step`. Returns the number of lanes with a point marked, and how
+    many of them take quarter steps (see _quarter_steps).
     """
     touching = _trial_group(L, 0)
     if groups > 1:  # (else the second group is idle: no lane in contact)
@@ -241,9 +249,9 @@ def _commit_steps(L, contact):
     fixed steps keep the contact on), the force is 0 and stays so, and neither the force
     peak nor the approach to a separation needs looking at. The step's int V^2 dt comes
     from its ends (kernel._v2_integral). Returns the number of lanes with a point (not
-    idle) marked _NEED.
+    idle) marked _NEED, and how many of them take quarter steps (_quarter).
     """
-    marked = 0
+    marked, quarters = 0, 0
     for j in range(LANES):
         x, v, e, ch = L[_X + j], L[_V + j], L[_E + j], L[_CH + j]
         xn, vn, en = L[_XN + j], L[_VN + j], L[_EN + j]
@@ -263,9 +271,11 @@ def _commit_steps(L, contact):
             predict = (not located) & (L[_PCHL + j] > 0.0) & (x <= g) & (v > 0.0)
             switch = located & (((xn > g) & (1.0 + ch * vn > 0.0)) != (on == 1.0))
             touch = (not located) & (x <= g) & (xn > g)
-            need = (need | switch | touch | predict
-                    | (located & (on == 1.0) & (v < 0.0) & (x - g < -3.0 * h * v))
-                    | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn)))
+            quarter = located & (on == 1.0) & (  # as _quarter
+                (L[_FINE + j] > 0.0) | ((v < 0.0) & (x - g < -3.0 * h * v)))
+            need = need | switch | touch | predict | quarter | (
+                (fcp > 0.0) & (fc >= fcp) & (fc > fcn))
+            quarters += 1 if quarter else 0
             L[_FCP + j], L[_FC + j] = fcp if need else fc, fc if need else fcn
         else:  # (the force rows stay as they are: 0, or the last force of a contact,
             # which the touch step, never a plain one, shifts out)
@@ -286,7 +296,88 @@ def _commit_steps(L, contact):
         L[_K + j] += 1.0 - off
         L[_VMAX + j] = max(L[_VMAX + j], abs(v))
         marked += 1 if need else 0
-    return marked
+    return marked, quarters
+
+
+@njit(inline="always", **_JIT)
+def _quarter(L, j):
+    """Whether lane ``j``'s step is to be taken in quarter steps: its contact switches
+    located, in contact, and just after a touch (_FINE) or about to separate (within 3
+    steps at its velocity). These steps still see the (t - t_0)^1.5 growth of the force."""
+    x, v, h = L[_X + j], L[_V + j], L[_PH + j]
+    return L[_PLOC + j] != 0.0 and L[_ON + j] == 1.0 and (
+        L[_FINE + j] > 0.0 or (v < 0.0 and x - L[_PG + j] < -3.0 * h * v))
+
+
+@njit(**_JIT)
+def _quarter_steps(L, lanes):
+    """Redo the trial step of the marked lanes (_NEED) that take quarter steps (_quarter)
+    in four quarter steps with the contact force, for _finish_step to finish.
+
+    They are packed into whole blocks of _BLOCK lanes (the last padded with copies of the
+    first), which run in vector code: a point's quarter steps are the same instructions in
+    any lane of a block, and cost a block, not a lane each, when several lanes take them
+    together (the copies of a point in an ensemble, neighbouring gaps in a sweep).
+    """
+    n = 0
+    for j in range(lanes):
+        if L[_NEED + j] == 0.0 or not _quarter(L, j):
+            continue
+        L[_QJ + n] = j
+        L[_QX + n], L[_QV + n], L[_QE + n] = L[_X + j], L[_V + j], L[_E + j]
+        L[_QS + n], L[_QC + n], L[_QA + n] = L[_S + j], L[_C + j], L[_PA + j]
+        L[_QCE + n], L[_QSE + n], L[_QDT + n] = L[_PCE + j], L[_PSE + j], 0.25 * L[_PH + j]
+        L[_QWN2 + n], L[_QCM + n], L[_QTHM + n] = L[_PWN2 + j], L[_PCM + j], L[_PTHM + j]
+        L[_QKHM + n], L[_QG + n], L[_QCH + n] = L[_PKHM + j], L[_PG + j], L[_CH + j]
+        L[_QIRC + n], L[_QTHC + n] = L[_PIRC + j], L[_PTHC + j]
+        n += 1
+    if n == 0:
+        return
+    blocks = (n + _BLOCK - 1) // _BLOCK
+    for k in range(n, blocks * _BLOCK):
+        for r in range(_QJ, _QTHC + LANES, LANES):
+            L[r + k] = L[r]
+    # (each block's offset written out: LLVM vectorizes the loop of a block whose offset
+    # it knows)
+    _quarter_block(L, 0)
+    if blocks > 1:
+        _quarter_block(L, _BLOCK)
+    if blocks > 2:
+        _quarter_block(L, 2 * _BLOCK)
+    if blocks > 3:
+        _quarter_block(L, 3 * _BLOCK)
+    for k in range(n):
+        j = int(L[_QJ + k])
+        L[_XN + j], L[_VN + j], L[_EN + j] = L[_QX + k], L[_QV + k], L[_QE + k]
+
+
+@njit(inline="always", **_JIT)
+def _quarter_block(L, b):
+    """Four quarter steps of the packed lanes b, ..., b + _BLOCK - 1 (see _quarter_steps),
+    with the forcing every eighth of a step by rotating the phase; written out, as LLVM
+    vectorizes only a loop without an inner loop."""
+    for k in range(b, b + _BLOCK):
+        x, v, e, s0, c0 = L[_QX + k], L[_QV + k], L[_QE + k], L[_QS + k], L[_QC + k]
+        A, ce, se, dt = L[_QA + k], L[_QCE + k], L[_QSE + k], L[_QDT + k]
+        wn2, cm, thm, khm = L[_QWN2 + k], L[_QCM + k], L[_QTHM + k], L[_QKHM + k]
+        g, ch, irc, thc = L[_QG + k], L[_QCH + k], L[_QIRC + k], L[_QTHC + k]
+        s1, c1 = s0 * ce + c0 * se, c0 * ce - s0 * se
+        s2, c2 = s1 * ce + c1 * se, c1 * ce - s1 * se
+        s3, c3 = s2 * ce + c2 * se, c2 * ce - s2 * se
+        s4, c4 = s3 * ce + c3 * se, c3 * ce - s3 * se
+        s5, c5 = s4 * ce + c4 * se, c4 * ce - s4 * se
+        s6, c6 = s5 * ce + c5 * se, c5 * ce - s5 * se
+        s7, c7 = s6 * ce + c6 * se, c6 * ce - s6 * se
+        s8 = s7 * ce + c7 * se
+        x, v, e, _, _ = _rk4(x, v, e, dt, A * s0, A * s1, A * s2, wn2, cm, thm, khm, g, ch, irc,
+                             thc)
+        x, v, e, _, _ = _rk4(x, v, e, dt, A * s2, A * s3, A * s4, wn2, cm, thm, khm, g, ch, irc,
+                             thc)
+        x, v, e, _, _ = _rk4(x, v, e, dt, A * s4, A * s5, A * s6, wn2, cm, thm, khm, g, ch, irc,
+                             thc)
+        x, v, e, _, _ = _rk4(x, v, e, dt, A * s6, A * s7, A * s8, wn2, cm, thm, khm, g, ch, irc,
+                             thc)
+        L[_QX + k], L[_QV + k], L[_QE + k] = x, v, e
 
 
 @njit(**_JIT)
@@ -344,11 +435,7 @@ def _finish_step(L, j):
                                      ch, irc, thc)
         dq = q1 + q2
         fine = 3.0 if onset else 0.0
-    elif fine > 0.0 or (on == 1.0 and v < 0.0 and x - g < -3.0 * h * v):
-        # The steps just after a touch or before a separation still see the
-        # (t - t_0)^1.5 force: quarter steps there.
-        xn, vn, en, dq = _rk4_pieces(x, v, e, 0.0, 1.0, _EQUAL, False, s0, c0, n_steps, h, A,
-                                     wn2, cm, thm, on * khm, g, ch, irc, thc)
+    elif _quarter(L, j):  # the trial step was taken in quarter steps (_quarter_steps)
         fine = max(fine - 1.0, 0.0)
     dvn = -irc * en - thc * vn
     if v > 0.0 >= vn or v < 0.0 <= vn:
@@ -455,8 +542,11 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
             if i < n_series:
                 series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
                 series[i, 3] = L[_FC + 0]
-        if _lane_steps(L, groups) == 0:
+        marked, quarters = _lane_steps(L, groups)
+        if marked == 0:
             continue
+        if quarters > 0:
+            _quarter_steps(L, lanes)
         finished = False
         for j in range(lanes):
             if L[_NEED + j] == 0.0 or point[j] < 0:
