@@ -460,12 +460,18 @@ def _finish_step(L, j):
     L[_FCMAX + j] = max(L[_FCMAX + j], fc, fcn)
     k = L[_K + j] + 1.0
     L[_K + j] = k
-    if k < n_steps:  # the forcing phase of the next step, exact (the rotation drifts)
+    # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
+    # every _SYNC steps (the rotation's rounding drifts); at k = n_steps the period ends
+    # and _start_period sets it to 0.
+    sync = _SYNC * math.floor(k / _SYNC)
+    if k == sync and k < n_steps:
         phase = 2.0 * math.pi * k / n_steps
         L[_S + j], L[_C + j] = math.sin(phase), math.cos(phase)
-    # (at k = n_steps the period ends and _start_period sets the phase to 0)
+    else:
+        cb, sb = L[_PCB + j], L[_PSB + j]
+        L[_S + j], L[_C + j] = s0 * cb + c0 * sb, c0 * cb - s0 * sb
     # the next step to stop at: the next, in quarter steps, else a resync or the end
-    L[_KSYNC + j] = k + 1.0 if fine > 0.0 else min(k + _SYNC, n_steps)
+    L[_KSYNC + j] = k + 1.0 if fine > 0.0 else min(sync + _SYNC, n_steps)
 
 
 @njit(**_JIT)
