@@ -109,8 +109,8 @@ assert LANES == 2 * GROUP
  ) = range(0, 83 * LANES, LANES)
 _ROWS = 83
 _BLOCK = 4  # lanes of one vector: quarter steps run on whole blocks of packed lanes
-_SYNC = 512.0  # most steps between exact resets of the forcing rotation (its rounding
-# drifts); it is reset at every step finished in scalar code, a few times per period
+_SYNC = 512.0  # steps between exact resets of the forcing rotation (its rounding drifts):
+# at every multiple of _SYNC steps, and at each period's start
 
 
 @njit(**_JIT)
