@@ -326,7 +326,9 @@ def _switch_step(x, v, V, a0, xn, vn, Vn, on, s0, c0, n_steps, h, A, wn2, cm, th
     then refined by Newton on RK4 sub-steps. The caller integrates up to the switch with
     the old contact state and after it with the new one, so that no RK4 step straddles the
     kink of the force. Returns the kind of switch (1: x = g, 2: 1 + c_h v = 0, 0: already
-    across at the start of the step) and the switch time as a fraction theta of the step.
+    across at the start of the step), the switch time as a fraction theta of the step,
+    whether Newton converged, and then x, v, V and int V^2 dt at the end of its last
+    sub-step, which ends at theta (the caller keeps them rather than step there again).
     s0, c0 are sin, cos of the forcing phase at the start of the step.
     """
     w = math.pi / n_steps  # forcing phase per half step

@@ -163,8 +163,7 @@ def _start_period(L, j):
     L[_FCP + j], L[_FC + j], L[_FCMAX + j] = fc, fc, fc
     L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
     L[_S + j], L[_C + j] = 0.0, 1.0
-    # the next step to stop at: the first, in quarter steps, else a resync or the end
-    L[_KSYNC + j] = 1.0 if L[_FINE + j] > 0.0 else min(_SYNC, L[_PNS + j])
+    L[_KSYNC + j] = min(_SYNC, L[_PNS + j])  # the next step to stop at: a resync or the end
 
 
 @njit(**_JIT)
@@ -470,8 +469,9 @@ def _finish_step(L, j):
     else:
         cb, sb = L[_PCB + j], L[_PSB + j]
         L[_S + j], L[_C + j] = s0 * cb + c0 * sb, c0 * cb - s0 * sb
-    # the next step to stop at: the next, in quarter steps, else a resync or the end
-    L[_KSYNC + j] = k + 1.0 if fine > 0.0 else min(sync + _SYNC, n_steps)
+    # the next step to stop at: a resync or the end (a lane in quarter steps is marked as
+    # such by _commit_steps)
+    L[_KSYNC + j] = min(sync + _SYNC, n_steps)
 
 
 @njit(**_JIT)
