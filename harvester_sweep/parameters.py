@@ -6,6 +6,7 @@ command line, the Python API, the datasets and the docs all use these names.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -247,13 +248,27 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
                 "stop_mass computes hertz_stiffness from the materials"
             )
     values.update(overrides)
-    checked = {name: PARAMETERS[name].check(values[name]) for name in PARAMETERS}
+    checked = {name: _check(name, values[name]) for name in PARAMETERS}
     if checked["stop_mass"] is not None:
         checked["hertz_stiffness"] = hertz_stiffness_from_bodies(
             checked["mass"], checked["tip_material"], checked["stop_mass"], checked["stop_material"]
         )
     _check_step(checked)
     return checked
+
+
+def _check(name: str, value):
+    """PARAMETERS[name].check(value), remembered: a sweep checks the same values again at
+    every point of its grid."""
+    try:
+        return _check_remembered(name, type(value), value)
+    except TypeError:  # an unhashable value
+        return PARAMETERS[name].check(value)
+
+
+@functools.lru_cache(maxsize=4096)
+def _check_remembered(name: str, kind: type, value):
+    return PARAMETERS[name].check(value)
 
 
 class StabilityWarning(UserWarning):
