@@ -268,6 +268,8 @@ def _check(name: str, value):
 
 @functools.lru_cache(maxsize=4096)
 def _check_remembered(name: str, kind: type, value):
+    """PARAMETERS[name].check(value); ``kind`` is type(value), part of the key only, so that
+    1, 1.0 and True (equal as keys) are checked each as itself."""
     return PARAMETERS[name].check(value)
 
 
