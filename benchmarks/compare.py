@@ -8,8 +8,9 @@ gains; two packages loaded side by side (as hs_a and hs_b, copied to a temporary
 and run in turn see the same drift, so their ratio is what a change did (a checkout
 compared with itself gives 1.000). Each figure is the best of the rounds:
 
-- the 64 x 64 gap x frequency sweep of benchmarks/test_speed.py, and the same grid with
-  the stop out of reach, on all threads: RK4 steps per second;
+- the 64 x 64 gap x frequency sweep of benchmarks/test_speed.py, the same grid with
+  the stop out of reach, and a 32 x 64 one swept up and down in frequency (each point
+  from the state of the one before), on all threads: RK4 steps per second;
 - one thread, 64 points for 60 periods (no settling): the paper scene in 64 identical
   lanes at 368 and 1168 steps per period (the steps of accuracies 1e-5 and 1e-7), and 64
   frequencies from 130 to 150 Hz at 1024 steps with the stop in reach and out of reach:
@@ -32,6 +33,12 @@ import numpy as np
 GRID = {"gap": {"start": 0.25e-6, "stop": 4e-6, "num": 64},
         "frequency": {"start": 100, "stop": 250, "num": 64}}
 FREE = {"gap": {"start": 1.0, "stop": 1.1, "num": 64}, "frequency": GRID["frequency"]}
+HALF = {"gap": {**GRID["gap"], "num": 32}, "frequency": GRID["frequency"]}
+SWEEPS = {  # name: (grid, directions)
+    "64 x 64 sweep [M steps/s]": (GRID, None),
+    "64 x 64, stop out of reach [M steps/s]": (FREE, None),
+    "32 x 64 swept up and down (continuation) [M steps/s]": (HALF, ["up", "down"]),
+}
 POINTS = {  # name: (steps per period, gap [m] or None for the preset's, spread frequencies)
     "paper, 368 steps, 64 identical lanes": (368, None, False),
     "paper, 1168 steps, 64 identical lanes": (1168, None, False),
@@ -47,10 +54,12 @@ def _load(tag: str, checkout: Path, into: Path):
     return importlib.import_module(f"hs_{tag}")
 
 
-def _sweep_rate(hs, grid) -> float:
+def _sweep_rate(hs, grid, directions=None) -> float:
     spec = {"preset": "paper", "parameters": {"steps_per_period": 1024}, "grid": grid,
             "sweep": {"outputs": ["power", "v_peak", "x_max", "orbit_period"],
                       "error_estimate": "none"}}
+    if directions:
+        spec["sweep"]["directions"] = directions
     start = time.perf_counter()
     ds = hs.run_sweep(spec, None, progress=False)
     return int(ds.periods_run.sum()) * 1024 / (time.perf_counter() - start)
@@ -93,9 +102,8 @@ def main(argv=None) -> None:
         threads = numba.get_num_threads()
         for _ in range(args.rounds):
             for t, hs in mods.items():
-                for name, grid in (("64 x 64 sweep [M steps/s]", GRID),
-                                   ("64 x 64, stop out of reach [M steps/s]", FREE)):
-                    rate = _sweep_rate(hs, grid) / 1e6
+                for name, (grid, directions) in SWEEPS.items():
+                    rate = _sweep_rate(hs, grid, directions) / 1e6
                     best[t, name] = max(best.get((t, name), 0.0), rate)
                 numba.set_num_threads(1)
                 for name in POINTS:

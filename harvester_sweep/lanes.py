@@ -9,9 +9,11 @@ to a touch or a separation, an extremum or a force peak to place, the end of a f
 period) are finished lane by lane with the scalar functions of
 :mod:`harvester_sweep.kernel`; the steps just after a touch and before a separation,
 in quarter steps, run first, in vector code on the lanes that take them, packed
-(_quarter_steps). A lane whose point is done takes the next point of the
-queue, so that slow points do not hold a group back; once the queue is empty the points
-left are moved to the first lanes and an empty group is skipped.
+(_quarter_steps). A lane whose point is done takes the next point of its line (the next
+frequency of a continuation, from the state the point left) or else the first point of
+the next line of the queue, so that slow points do not hold a group back and no lane
+waits for other lines; once the queue is empty the points left are moved to the first
+lanes and an empty group is skipped.
 
 A point's result does not depend on its lane, its queue or the thread count: every lane
 runs the same vector instructions (tests/test_reproducibility.py checks a point in
@@ -21,6 +23,7 @@ state, and nothing is reassociated (see kernel.FASTMATH)."""
 from __future__ import annotations
 
 import math
+import threading
 from pathlib import Path
 
 import numba
@@ -521,9 +524,12 @@ def _output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
 
 
 @njit(**_JIT)
-def _run_queue(params, states, metrics, strobes, series, settle, queue):
-    """Run the points ``queue`` (indices) to the end, LANES at a time; a lane whose point
-    is done takes the next one, so that no lane waits for the slowest point."""
+def _run_queue(params, states, metrics, strobes, series, settle, queue, successors, control, b):
+    """Run the lines that start at the points ``queue`` (indices) to their ends, LANES at a
+    time: a lane whose point is done takes the point ``successors`` names next on its line
+    (-1: none), from the state it left, or else the next line of the queue, so that no
+    lane waits for the slowest point. ``control[b]`` counts the points done;
+    ``control[-1]`` set to nonzero stops taking points (see _next_point)."""
     lanes = min(LANES, len(queue))
     n_strobe = strobes.shape[1]
     ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
@@ -534,14 +540,17 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
     point = np.full(lanes, -1)
     n_series = series.shape[0]
     taken = 0
-    for j in range(lanes, LANES):
+    for j in range(LANES):
         _idle(L, j)
-    for j in range(lanes):
-        _take(L, j, params, states, queue[taken], ring, acc, gaps)
-        point[j] = queue[taken]
-        taken += 1
-    active = lanes
-    groups = (lanes + GROUP - 1) // GROUP
+    active = 0
+    for j in range(lanes):  # the lanes that get no point are the last ones
+        pt, taken = _next_point(params, states, successors, queue, taken, -1, False, control, b)
+        if pt < 0:
+            break
+        _take(L, j, params, states, pt, ring, acc, gaps)
+        point[j] = pt
+        active += 1
+    groups = (active + GROUP - 1) // GROUP
     while active > 0:
         if n_series > 0:  # one point recorded at every step boundary
             i = int(L[_N + 0] * L[_PNS + 0] + L[_K + 0])
@@ -572,10 +581,12 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
                     series[i, 3] = L[_FC + 0]
             _output(L, j, params[pt], states[pt], metrics[pt], strobes[pt], ring[j], acc[j],
                     ring_len, status, orbit)
-            if taken < len(queue):
-                _take(L, j, params, states, queue[taken], ring, acc, gaps)
-                point[j] = queue[taken]
-                taken += 1
+            control[b] += 1
+            pt, taken = _next_point(params, states, successors, queue, taken, pt,
+                                    status == DIVERGED, control, b)
+            if pt >= 0:
+                _take(L, j, params, states, pt, ring, acc, gaps)
+                point[j] = pt
             else:
                 point[j] = -1
                 _idle(L, j)
@@ -590,6 +601,37 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue):
                         point[active], point[j] = point[j], -1
                     active += 1
             groups = (active + GROUP - 1) // GROUP
+
+
+@njit(**_JIT)
+def _next_point(params, states, successors, queue, taken, done, diverged, control, b):
+    """The next point to run after point ``done`` (-1: none yet), and the heads of lines
+    taken from ``queue`` so far: ``done``'s successor, which starts from ``done``'s final
+    state (from its own initial state, the state at rest, when ``done`` ``diverged``), or
+    else the next line of the queue; -1 when none is left or ``control[-1]`` asks to stop.
+
+    A point whose budget of periods (P_MAXP) is 0 is not run (refused before integration,
+    its outputs left for the caller to write): its state passes on to its successor.
+    """
+    pt = -1
+    if done >= 0:
+        pt = successors[done]
+        if pt >= 0 and not diverged:
+            states[pt, :] = states[done, :]
+    while control[len(control) - 1] == 0:
+        if pt < 0:
+            if taken == len(queue):
+                return -1, taken
+            pt = queue[taken]
+            taken += 1
+        if params[pt, P_MAXP] > 0.0:
+            return pt, taken
+        control[b] += 1
+        following = successors[pt]
+        if following >= 0:
+            states[following, :] = states[pt, :]
+        pt = following
+    return -1, taken
 
 
 @njit(**_JIT)
@@ -622,7 +664,7 @@ def _take(L, j, params, states, pt, ring, acc, gaps):
     gaps[j, :, :] = np.inf
 
 
-def run_points(params, states, metrics, strobes) -> None:
+def run_points(params, states, metrics, strobes, successors=None, on_points=None) -> None:
     """Run every point to steady state, on all numba threads.
 
     ``params[i]`` is a parameter row (``kernel.pack_parameters``), ``states[i]`` the state
@@ -630,18 +672,63 @@ def run_points(params, states, metrics, strobes) -> None:
     the last S stroboscopic samples). Points are independent and each is computed by the
     same instructions whichever lane or thread takes it, so a point's result does not
     depend on the thread count or on the other points.
+
+    ``successors[i]``, when given, is the point that starts from point i's final state
+    (-1: none), one frequency on of a continuation line (it starts from its own
+    ``states`` when point i diverges). A lane walks a line to its end, with no wait for
+    other lines. A point whose row has P_MAXP = 0 is not run: its state passes on and its
+    outputs are left unwritten. ``on_points(n)``, when given, is called in this thread as
+    points finish (n: how many since the last call); the kernel then runs in another
+    thread, and stops taking points when ``on_points`` raises (or on KeyboardInterrupt).
     """
-    queues = max(1, min(numba.get_num_threads(), params.shape[0]))
-    _run_queues(params, states, metrics, strobes, queues)
+    n = params.shape[0]
+    successors = (np.full(n, -1, dtype=np.int64) if successors is None
+                  else np.ascontiguousarray(successors, dtype=np.int64))
+    continued = np.zeros(n + 1, dtype=bool)
+    continued[successors] = True  # (index -1 marks the spare entry n)
+    heads = np.flatnonzero(~continued[:n])
+    queues = max(1, min(numba.get_num_threads(), len(heads)))
+    control = np.zeros(queues + 1, dtype=np.int64)  # points done per queue; stop
+    args = (params, states, metrics, strobes, successors, heads, control)
+    if on_points is None:
+        _run_queues(*args)
+        return
+    failure = []
+
+    def run():
+        try:
+            _run_queues(*args)
+        except BaseException as error:  # raised again in the calling thread
+            failure.append(error)
+
+    worker = threading.Thread(target=run, name="harvester_sweep kernel", daemon=True)
+    worker.start()
+    reported = 0
+    try:
+        while worker.is_alive():
+            worker.join(_POLL)
+            done = int(control[:queues].sum())
+            if done > reported:
+                on_points(done - reported)
+                reported = done
+    finally:
+        control[queues] = 1  # a no-op once the kernel is done; else it stops taking points
+        worker.join()
+    if failure:
+        raise failure[0]
 
 
-@njit(parallel=True, **_JIT)
-def _run_queues(params, states, metrics, strobes, queues):
-    """One queue of points per thread, the points dealt in turn (neighbours cost alike)."""
+_POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
+
+
+@njit(parallel=True, nogil=True, **_JIT)
+def _run_queues(params, states, metrics, strobes, successors, heads, control):
+    """One queue of lines per thread, the lines dealt in turn (neighbours cost alike)."""
     no_series = np.empty((0, 4))
+    queues = len(control) - 1
     for b in prange(queues):
-        _run_queue(params, states, metrics, strobes, no_series, True,
-                   np.arange(b, params.shape[0], queues))
+        _run_queue(params, states, metrics, strobes, no_series, True, heads[b::queues].copy(),
+                   successors, control, b)
 
 
 def warm_up() -> None:
@@ -671,7 +758,8 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     n_steps = int(row[P_N])
     series = np.empty((periods * n_steps + 1, 4))
     _run_queue(row[None, :], state.copy()[None, :], np.empty((1, NM)), np.empty((1, 0, 3)),
-               series, False, np.zeros(1, dtype=np.int64))
+               series, False, np.zeros(1, dtype=np.int64), np.full(1, -1, dtype=np.int64),
+               np.zeros(2, dtype=np.int64), 0)
     return series
 
 

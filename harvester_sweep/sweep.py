@@ -3,10 +3,10 @@
 Work is split into *lines* and *chunks*. Under frequency continuation (``sweep.directions``)
 a line is the frequency axis at fixed values of the other axes and one direction: each point
 starts from the previous point's final state. Without continuation every point is a line of
-one point, run from rest. A chunk is a run of whole lines; its lines go through
-:func:`lanes.run_points` together, one frequency step at a time, so numba's threads share
-them. Lines never interact, so a point's result does not depend on the chunking, the thread
-count or the machine that ran its chunk.
+one point, run from rest. A chunk is a run of whole lines, which go through one call of
+:func:`lanes.run_points`: numba's threads share them, and a lane walks a line from point to
+point with no wait for the other lines. Lines never interact, so a point's result does not
+depend on the chunking, the thread count or the machine that ran its chunk.
 
 With an output file, each finished chunk is saved in ``OUT.nc.partial/`` at once; a resumed
 run computes only the missing chunks. The netCDF file is written aside and renamed when
@@ -85,7 +85,7 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
               disable=not progress or not sys.stderr.isatty()) as bar:
         if workers is None and scheduler is None:
             for chunk in todo:
-                store.save(chunk, compute_chunk(spec, chunk, on_step=bar.update))
+                store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update))
         else:
             _run_on_dask(spec, todo, store, bar, workers, scheduler)
     ds = sweep_dataset(spec, [store.load(chunk) for chunk in range(spec.n_chunks)])
@@ -98,7 +98,7 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
 
 
 def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
-                  on_step=None) -> dict:
+                  on_points=None) -> dict:
     """Run the lines of one chunk; the unit of work of a sweep (also on dask workers).
 
     Parameters
@@ -108,8 +108,9 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
         Chunk index, 0 <= chunk < ``spec.n_chunks``.
     threads : int, optional
         numba threads to use (on a worker process sharing its machine with others).
-    on_step : callable, optional
-        Called with the number of points finished after each call of the kernel.
+    on_points : callable, optional
+        Called with the number of points newly finished, as they finish (about every
+        0.2 s); what it raises stops the chunk and is raised again.
 
     Returns
     -------
@@ -125,12 +126,12 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     first = chunk * spec.lines_per_chunk
     lines = range(first, min(first + spec.lines_per_chunk, spec.n_lines))
     n, length = len(lines), spec.line_length
-    # Step-major arrays: each kernel call gets C-contiguous slices, the layout warm_up()
-    # compiled (another layout would be compiled anew).
-    rows = np.empty((length, n, kernel.NP))
-    rest = np.empty((n, 4))
+    # Line-major arrays, each line in the order it runs (a down line from its highest
+    # frequency): point (i, k) continues from point (i, k - 1).
+    rows = np.empty((n, length, kernel.NP))
+    states = np.empty((n, length, 4))
     reverse = np.zeros(n, dtype=bool)
-    refused = np.zeros((length, n), dtype=bool)
+    refused = np.zeros((n, length), dtype=bool)
     for i, line in enumerate(lines):
         index = np.unravel_index(line, spec.line_shape)
         if spec.continuation:
@@ -144,42 +145,41 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
             try:
                 point = spec.point_parameters(values)
             except TooStiffError:
-                # Refused before integration: a row that runs no period, flagged below.
+                # Refused before integration: a row of no period, which the kernel skips
+                # (the line goes on from the state before it); flagged below.
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", StabilityWarning)
                     point = resolve_parameters(spec.preset, **{**spec.fixed, **values,
                                                                "steps_per_period": 64,
                                                                "max_periods": 1})
                 point["max_periods"] = 0
-                refused[step, i] = True
-            rows[step, i] = kernel.pack_parameters(point)
-        rest[i] = kernel.initial_state(point)  # impact_velocity is constant along a line
-    position = np.where(reverse[None, :], length - 1 - np.arange(length)[:, None],
-                        np.arange(length)[:, None])
-    estimated = spec.estimated(np.asarray(lines)[None, :] * length + position) & ~refused
+                refused[i, step] = True
+            rows[i, step] = kernel.pack_parameters(point)
+        # From rest; also where the point before diverged. impact_velocity is constant
+        # along a line.
+        states[i] = kernel.initial_state(point)
+    successors = np.arange(1, n * length + 1).reshape(n, length)
+    successors[:, -1] = -1
+    position = np.where(reverse[:, None], length - 1 - np.arange(length)[None, :],
+                        np.arange(length)[None, :])
+    estimated = spec.estimated(np.asarray(lines)[:, None] * length + position) & ~refused
 
     lanes.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
-    states = rest.copy()
-    metrics = np.empty((length, n, kernel.NM))
-    strobes = np.empty((length, n, spec.samples, 3))
-    finals = np.empty((length, n, 4))
-    for step in range(length):
-        lanes.run_points(rows[step], states, metrics[step], strobes[step])
-        finals[step] = states
-        metrics[step, refused[step]] = np.nan
-        metrics[step, refused[step], kernel.M_STATUS] = kernel.TOO_STIFF
-        metrics[step, refused[step], kernel.M_PERIODS] = 0
-        metrics[step, refused[step], kernel.M_ORBIT] = 0
-        # A diverged state would poison the rest of its line: continue it from rest.
-        diverged = metrics[step, :, kernel.M_STATUS] == kernel.DIVERGED
-        states[diverged] = rest[diverged]
-        if on_step is not None:
-            on_step(n)
+    metrics = np.empty((n, length, kernel.NM))
+    strobes = np.empty((n, length, spec.samples, 3))
+    # (reshaped views: the kernel writes the final states into ``states``)
+    lanes.run_points(rows.reshape(-1, kernel.NP), states.reshape(-1, 4),
+                     metrics.reshape(-1, kernel.NM), strobes.reshape(n * length, spec.samples, 3),
+                     successors.ravel(), on_points)
+    metrics[refused] = np.nan
+    metrics[refused, kernel.M_STATUS] = kernel.TOO_STIFF
+    metrics[refused, kernel.M_PERIODS] = 0
+    metrics[refused, kernel.M_ORBIT] = 0
+    strobes[refused] = np.nan
     run_time = time.perf_counter() - start
-    errors = _halving_errors(rows, finals, metrics, estimated)
+    errors = _halving_errors(rows, states, metrics, estimated)
 
-    metrics, strobes, errors = metrics.swapaxes(0, 1), strobes.swapaxes(0, 1), errors.swapaxes(0, 1)
     metrics[reverse] = metrics[reverse, ::-1]  # down lines ran from the highest frequency
     strobes[reverse] = strobes[reverse, ::-1]
     errors[reverse] = errors[reverse, ::-1]
@@ -199,7 +199,7 @@ def _halving_errors(rows, finals, metrics, estimated) -> np.ndarray:
         halved[:, kernel.P_N] *= 2
         fine = np.empty((len(halved), kernel.NM))
         lanes.run_points(halved, finals[estimated].copy(), fine,
-                          np.empty((len(halved), 0, 3)))
+                         np.empty((len(halved), 0, 3)))
         errors[estimated] = halving_error(metrics[estimated], fine)
     return errors
 

@@ -79,9 +79,12 @@ def test_too_stiff_stops_with_message_and_is_flagged_in_a_sweep(capsys):
                  "--set", "max_steps_per_period=100000"]) == 2
     assert "too stiff" in capsys.readouterr().err
     ds = run_sweep({"preset": "paper", "parameters": {"max_steps_per_period": 100_000},
-                    "grid": {"contact_damping": [118.25, 1e5, 1.07e11]}}, progress=False)
+                    "grid": {"contact_damping": [118.25, 1e5, 1.07e11]},
+                    "sweep": {"outputs": ["power", "strobe"], "samples": 2}}, progress=False)
     assert ds.status.values.tolist() == [0, 0, 3]
     assert np.isnan(ds.power.values[2]) and np.all(np.isfinite(ds.power.values[:2]))
+    assert np.isnan(ds.strobe_voltage.values[2]).all()  # nothing ran: no sample either
+    assert np.isfinite(ds.strobe_voltage.values[:2]).all()
 
 
 def test_diverging_explicit_step_is_flagged_never_garbage():
