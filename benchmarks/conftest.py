@@ -86,6 +86,10 @@ def _table(f: dict) -> str:
         rows.append(f"| the same grid with the stop out of reach (gap 1 m): steps per second | "
                     f"{f['free_rate'] / 1e6:.0f} M/s | with contact: "
                     f"{100 * f['sweep_rate'] / f['free_rate']:.0f} % of this |")
+    if "continued_rate" in f:
+        rows.append(f"| 32 x 64 gap x frequency, swept up and down (each point from the state "
+                    f"of the frequency before): steps per second | "
+                    f"{f['continued_rate'] / 1e6:.0f} M/s | {share(f['continued_rate'])} |")
     if "loop_free" in f:
         rows.append(f"| the vector loop alone, one core, lane-steps per second: no lane in contact "
                     f"/ all in contact | {f['loop_free'] / 1e6:.0f} M/s / "
@@ -127,8 +131,10 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     text = _table(FIGURES)
     terminalreporter.write_sep("=", "speed of the sweep engine")
     terminalreporter.write(text)
-    complete = (all(k in FIGURES for k in ("sweep_rate", "free_rate", "cold_start"))
-                and all("lsoda" in row for row in FIGURES.get("points", {}).values()))
+    points = FIGURES.get("points", {})
+    complete = (all(k in FIGURES for k in ("sweep_rate", "free_rate", "continued_rate",
+                                           "loop_free", "cold_start"))
+                and len(points) == 2 and all("lsoda" in row for row in points.values()))
     if complete and exitstatus == 0:
         RESULT.write_text(text)
         terminalreporter.write(f"written: {RESULT.relative_to(ROOT)}\n")
