@@ -697,6 +697,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
 
     def run():
         try:
+            numba.set_num_threads(queues)  # (numba's thread count is per calling thread)
             _run_queues(*args)
         except BaseException as error:  # raised again in the calling thread
             failure.append(error)

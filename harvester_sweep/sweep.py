@@ -132,12 +132,13 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     states = np.empty((n, length, 4))
     reverse = np.zeros(n, dtype=bool)
     refused = np.zeros((n, length), dtype=bool)
+    line_shape, line_axes = spec.line_shape, spec.line_axes
     for i, line in enumerate(lines):
-        index = np.unravel_index(line, spec.line_shape)
+        index = np.unravel_index(line, line_shape)
         if spec.continuation:
             reverse[i] = spec.directions[index[0]] == "down"
             index = index[1:]
-        values = {a: spec.grid[a][j].item() for a, j in zip(spec.line_axes, index)}
+        values = {a: spec.grid[a][j].item() for a, j in zip(line_axes, index)}
         for step in range(length):
             if spec.continuation:
                 j = length - 1 - step if reverse[i] else step
