@@ -706,8 +706,10 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     worker.start()
     reported = 0
     try:
-        while worker.is_alive():
+        running = True
+        while running:  # (at least once: a kernel may end before it is first looked at)
             worker.join(_POLL)
+            running = worker.is_alive()
             done = int(control[:queues].sum())
             if done > reported:
                 on_points(done - reported)
