@@ -675,7 +675,8 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
 
     ``successors[i]``, when given, is the point that starts from point i's final state
     (-1: none), one frequency on of a continuation line (it starts from its own
-    ``states`` when point i diverges). A lane walks a line to its end, with no wait for
+    ``states`` when point i diverges); a point is named at most once and lines do not
+    close on themselves (else ValueError). A lane walks a line to its end, with no wait for
     other lines. A point whose row has P_MAXP = 0 is not run: its state passes on and its
     outputs are left unwritten. ``on_points(n)``, when given, is called in this thread as
     points finish (n: how many since the last call); the kernel then runs in another
@@ -684,9 +685,21 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     n = params.shape[0]
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
                   else np.ascontiguousarray(successors, dtype=np.int64))
-    continued = np.zeros(n + 1, dtype=bool)
-    continued[successors] = True  # (index -1 marks the spare entry n)
-    heads = np.flatnonzero(~continued[:n])
+    linked = successors[successors >= 0]
+    if successors.shape != (n,) or (successors < -1).any() or (linked >= n).any() \
+            or len(np.unique(linked)) != len(linked):
+        raise ValueError("successors: must hold, for each point, the index of another point "
+                         "or -1, no point named twice")
+    continued = np.zeros(n, dtype=bool)
+    continued[linked] = True
+    heads = np.flatnonzero(~continued)
+    walked, ahead = len(heads), heads
+    while ahead.size:  # a line at a time step: every point on a line from a head
+        ahead = successors[ahead]
+        ahead = ahead[ahead >= 0]
+        walked += ahead.size
+    if walked != n:
+        raise ValueError("successors: a cycle of points (a line must have a first point)")
     queues = max(1, min(numba.get_num_threads(), len(heads)))
     control = np.zeros(queues + 1, dtype=np.int64)  # points done per queue; stop
     args = (params, states, metrics, strobes, successors, heads, control)

@@ -110,3 +110,12 @@ def test_progress_is_reported_as_points_finish_and_an_error_stops_the_run(monkey
                          np.empty((n, 0, 3)), on_points=stop)
     run = (metrics[:, kernel.M_PERIODS] >= 0).sum()
     assert 0 < run < n // 2  # the points under way were finished, no other was taken
+
+
+@pytest.mark.parametrize("successors", [[1, 1, -1], [1, 3, -1], [1, -2, -1], [1, -1],
+                                        [-1, 2, 1], [-1, 1, -1]])
+def test_bad_successors_are_refused(successors):
+    rows, rest = _line(1e-6)
+    with pytest.raises(ValueError, match="successors"):
+        lanes.run_points(rows[:3], np.repeat(rest[None, :], 3, axis=0),
+                         np.empty((3, kernel.NM)), np.empty((3, 0, 3)), successors)
