@@ -685,21 +685,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     n = params.shape[0]
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
                   else np.ascontiguousarray(successors, dtype=np.int64))
-    linked = successors[successors >= 0]
-    if successors.shape != (n,) or (successors < -1).any() or (linked >= n).any() \
-            or len(np.unique(linked)) != len(linked):
-        raise ValueError("successors: must hold, for each point, the index of another point "
-                         "or -1, no point named twice")
-    continued = np.zeros(n, dtype=bool)
-    continued[linked] = True
-    heads = np.flatnonzero(~continued)
-    walked, ahead = len(heads), heads
-    while ahead.size:  # a line at a time step: every point on a line from a head
-        ahead = successors[ahead]
-        ahead = ahead[ahead >= 0]
-        walked += ahead.size
-    if walked != n:
-        raise ValueError("successors: a cycle of points (a line must have a first point)")
+    heads = _line_heads(successors, n)
     queues = max(1, min(numba.get_num_threads(), len(heads)))
     control = np.zeros(queues + 1, dtype=np.int64)  # points done per queue; stop
     args = (params, states, metrics, strobes, successors, heads, control)
@@ -735,6 +721,27 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
 
 
 _POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
+
+
+def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
+    """The first point of every line of ``successors`` (see run_points); ValueError where
+    they do not make lines."""
+    linked = successors[successors >= 0]
+    if successors.shape != (n,) or (successors < -1).any() or (linked >= n).any() \
+            or len(np.unique(linked)) != len(linked):
+        raise ValueError("successors: must hold, for each point, the index of another point "
+                         "or -1, no point named twice")
+    continued = np.zeros(n, dtype=bool)
+    continued[linked] = True
+    heads = np.flatnonzero(~continued)
+    walked, ahead = len(heads), heads
+    while ahead.size:  # one point further along every line per pass
+        ahead = successors[ahead]
+        ahead = ahead[ahead >= 0]
+        walked += ahead.size
+    if walked != n:  # the points left over close on themselves
+        raise ValueError("successors: a cycle of points (a line must have a first point)")
+    return heads
 
 
 @njit(parallel=True, nogil=True, **_JIT)
