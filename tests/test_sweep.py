@@ -145,6 +145,19 @@ def test_result_does_not_depend_on_threads_or_chunking():
     assert_same_bits(one, two)
 
 
+def test_default_chunks_hold_enough_lines_for_the_lanes():
+    """4096 points, or 128 whole lines under continuation (up to 2^17 points); a chunk_size
+    given is kept."""
+    fine = {"frequency": {"start": 100, "stop": 300, "num": 201},
+            "gap": {"start": 1e-6, "stop": 2e-6, "num": 100}}
+    swept = load_sweep(spec(fine, directions=["up", "down"]))
+    assert swept.lines_per_chunk == 128 and swept.n_chunks == 2  # 200 lines
+    assert load_sweep(spec(fine)).lines_per_chunk == 4096  # lines of one point
+    assert load_sweep(spec(fine, directions=["up"], chunk_size=4096)).lines_per_chunk == 20
+    long = {"frequency": {"start": 100, "stop": 300, "num": 2001}, "gap": [1e-6, 2e-6]}
+    assert load_sweep(spec(long, directions=["up"])).lines_per_chunk == 2**17 // 2001  # memory
+
+
 class Interrupted(Exception):
     pass
 
