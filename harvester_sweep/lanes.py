@@ -749,6 +749,7 @@ def _run_queues(params, states, metrics, strobes, successors, heads, control):
     """One queue of lines per thread, the lines dealt in turn (neighbours cost alike)."""
     no_series = np.empty((0, 4))
     queues = len(control) - 1
+    # (each queue a contiguous copy: with the strided slice, points ran about 2 % slower)
     for b in prange(queues):
         _run_queue(params, states, metrics, strobes, no_series, True, heads[b::queues].copy(),
                    successors, control, b)
