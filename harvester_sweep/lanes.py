@@ -686,6 +686,11 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
                   else np.ascontiguousarray(successors, dtype=np.int64))
     heads = _line_heads(successors, n)
+    # Lines dealt by forcing period (stable: in the callers' order within one): the lanes
+    # of a group then hold points whose contacts come at about the same step of the
+    # period, so that fewer steps of a group run the contact stages (a 64 x 64 gap x
+    # frequency sweep 5 % faster than with neighbouring frequencies in a group).
+    heads = heads[np.argsort(-params[heads, P_T], kind="stable")]
     queues = max(1, min(numba.get_num_threads(), len(heads)))
     control = np.zeros(queues + 1, dtype=np.int64)  # points done per queue; stop
     args = (params, states, metrics, strobes, successors, heads, control)
