@@ -29,11 +29,8 @@ from pathlib import Path
 
 import numba
 import numpy as np
+from cases import FREE, GRID, HALF, STEPS_PER_PERIOD, sweep_spec
 
-GRID = {"gap": {"start": 0.25e-6, "stop": 4e-6, "num": 64},
-        "frequency": {"start": 100, "stop": 250, "num": 64}}
-FREE = {"gap": {"start": 1.0, "stop": 1.1, "num": 64}, "frequency": GRID["frequency"]}
-HALF = {"gap": {**GRID["gap"], "num": 32}, "frequency": GRID["frequency"]}
 SWEEPS = {  # name: (grid, directions)
     "64 x 64 sweep [M steps/s]": (GRID, None),
     "64 x 64, stop out of reach [M steps/s]": (FREE, None),
@@ -55,14 +52,9 @@ def _load(tag: str, checkout: Path, into: Path):
 
 
 def _sweep_rate(hs, grid, directions=None) -> float:
-    spec = {"preset": "paper", "parameters": {"steps_per_period": 1024}, "grid": grid,
-            "sweep": {"outputs": ["power", "v_peak", "x_max", "orbit_period"],
-                      "error_estimate": "none"}}
-    if directions:
-        spec["sweep"]["directions"] = directions
     start = time.perf_counter()
-    ds = hs.run_sweep(spec, None, progress=False)
-    return int(ds.periods_run.sum()) * 1024 / (time.perf_counter() - start)
+    ds = hs.run_sweep(sweep_spec(grid, directions), None, progress=False)
+    return int(ds.periods_run.sum()) * STEPS_PER_PERIOD / (time.perf_counter() - start)
 
 
 def _points(hs, steps, gap, spread):

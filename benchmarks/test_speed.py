@@ -33,6 +33,7 @@ import numba
 import numpy as np
 import pytest
 from alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
+from cases import FREE, GRID, HALF, STEPS_PER_PERIOD, sweep_spec
 from reference import Reference
 
 import harvester_sweep as hs
@@ -40,17 +41,10 @@ from harvester_sweep import kernel, lanes
 
 ROOT = Path(__file__).resolve().parents[1]
 ENSEMBLE = 64
-GRID = {"gap": {"start": 0.25e-6, "stop": 4e-6, "num": 64},
-        "frequency": {"start": 100, "stop": 250, "num": 64}}
 
 
 def _sweep(grid: dict, output: Path, directions=None):
-    spec = {"preset": "paper", "parameters": {"steps_per_period": 1024}, "grid": grid,
-            "sweep": {"outputs": ["power", "v_peak", "x_max", "orbit_period"],
-                      "error_estimate": "none"}}
-    if directions:
-        spec["sweep"]["directions"] = directions
-    return hs.run_sweep(spec, output, progress=False)
+    return hs.run_sweep(sweep_spec(grid, directions), output, progress=False)
 
 
 def _rate(benchmark, grid, tmp_path, directions=None) -> tuple[float, float, int]:
@@ -68,7 +62,7 @@ def _rate(benchmark, grid, tmp_path, directions=None) -> tuple[float, float, int
 
     ds = benchmark.pedantic(run, rounds=1, iterations=1)
     assert int((ds.status == 2).sum()) == 0
-    steps = int(ds.periods_run.sum()) * 1024
+    steps = int(ds.periods_run.sum()) * STEPS_PER_PERIOD
     return steps / timing["wall"], timing["wall"], steps
 
 
@@ -78,15 +72,13 @@ def test_sweep_64x64(benchmark, figures, tmp_path):
 
 
 def test_sweep_64x64_stop_out_of_reach(benchmark, figures, tmp_path):
-    grid = {"gap": {"start": 1.0, "stop": 1.1, "num": 64}, "frequency": GRID["frequency"]}
-    figures["free_rate"] = _rate(benchmark, grid, tmp_path)[0]
+    figures["free_rate"] = _rate(benchmark, FREE, tmp_path)[0]
 
 
 def test_sweep_swept_up_and_down(benchmark, figures, tmp_path):
     """Frequency continuation: 32 gaps x 64 frequencies, each point from the final state of
     the frequency before, up and down (64 lines, which the lanes walk)."""
-    grid = {"gap": {**GRID["gap"], "num": 32}, "frequency": GRID["frequency"]}
-    figures["continued_rate"] = _rate(benchmark, grid, tmp_path, ["up", "down"])[0]
+    figures["continued_rate"] = _rate(benchmark, HALF, tmp_path, ["up", "down"])[0]
 
 
 @numba.njit(fastmath=kernel.FASTMATH, error_model="numpy")
