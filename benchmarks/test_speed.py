@@ -15,6 +15,7 @@ table, every ratio taken within this run, and writes benchmarks/results/speed.md
   default accuracy (1e-7) and at 1e-5; the final state is compared with
   tests/reference.py, and each alternative's time is interpolated (log-log, between the
   two tolerances that bracket it) to the engine's error;
+- each time the best of a few runs (see SWEEP_ROUNDS);
 - a new process running a one-point sweep with the on-disk cache warm;
 - with ``--million``: the 1e6-point 4-D sweep of examples/million_points.toml, its wall
   time and peak memory.
@@ -41,6 +42,13 @@ from harvester_sweep import kernel, lanes
 
 ROOT = Path(__file__).resolve().parents[1]
 ENSEMBLE = 64
+# Every time is the best of some runs: this shared machine has spells of a few seconds in
+# which its second core runs slower (a two-thread run then takes up to 1.5x as long; a
+# one-thread run hardly changes), which catch a whole ~3 s sweep, or every round of a
+# short measurement taken back to back. The engine's rounds per point are spread over 3 s;
+# the alternatives (one core) get ALTERNATIVE_ROUNDS too.
+SWEEP_ROUNDS = 3
+ALTERNATIVE_ROUNDS = 3
 
 
 def _sweep(grid: dict, output: Path, directions=None):
@@ -52,18 +60,19 @@ def _rate(benchmark, grid, tmp_path, directions=None) -> tuple[float, float, int
     # writes costs imports (xarray imports dask.distributed when installed: 0.27 s), which
     # the new-process figure counts.
     _sweep({"gap": [1e-6], "frequency": [140.0]}, tmp_path / "warm.nc")
-    timing = {}
+    walls = []
 
     def run():
         start = time.perf_counter()
         ds = _sweep(grid, tmp_path / "sweep.nc", directions)
-        timing["wall"] = time.perf_counter() - start
+        walls.append(time.perf_counter() - start)
         return ds
 
-    ds = benchmark.pedantic(run, rounds=1, iterations=1)
+    # Best of SWEEP_ROUNDS (see there).
+    ds = benchmark.pedantic(run, rounds=SWEEP_ROUNDS, iterations=1)
     assert int((ds.status == 2).sum()) == 0
     steps = int(ds.periods_run.sum()) * STEPS_PER_PERIOD
-    return steps / timing["wall"], timing["wall"], steps
+    return steps / min(walls), min(walls), steps
 
 
 def test_sweep_64x64(benchmark, figures, tmp_path):
@@ -155,8 +164,9 @@ def test_engine_per_point(benchmark, figures, paper):
             assert np.all(states == states[0])  # every lane the same bits
             out[n] = states
         numba.set_num_threads(threads)
+        time.sleep(0.3)  # (the rounds spread over 3 s: see SWEEP_ROUNDS)
 
-    benchmark.pedantic(run, rounds=5, iterations=1)
+    benchmark.pedantic(run, rounds=10, iterations=1)
     assert np.all(metrics[:, kernel.M_PERIODS] == periods)
     assert np.array_equal(out[1], out[threads])  # and on any thread count
     figures["ensemble"] = ENSEMBLE
@@ -191,14 +201,23 @@ def test_lsoda_per_point(benchmark, figures, paper):
     points = []
 
     def run():
-        points.clear()
         for rtol in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
             seconds, state = lsoda(p, periods, rtol)
             points.append((rtol, seconds, _error(state, exact)))
 
-    benchmark.pedantic(run, rounds=1, iterations=1)
+    benchmark.pedantic(run, rounds=ALTERNATIVE_ROUNDS, iterations=1)
     row = figures["points"][p["accuracy"]]
-    row["lsoda"], row["lsoda_how"] = _matched(points, row["error"])
+    row["lsoda"], row["lsoda_how"] = _matched(_best(points), row["error"])
+
+
+def _best(points: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+    """The shortest time of each tolerance's runs (rtol, time, error); its error, the same
+    in every run, with it."""
+    best = {}
+    for rtol, seconds, error in points:
+        if rtol not in best or seconds < best[rtol][1]:
+            best[rtol] = (rtol, seconds, error)
+    return list(best.values())
 
 
 def test_diffrax_per_point(benchmark, figures, paper):
@@ -211,14 +230,13 @@ def test_diffrax_per_point(benchmark, figures, paper):
     points = []
 
     def run():
-        points.clear()
         for rtol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
             seconds, states = diffrax_ensemble(p, periods, ENSEMBLE, rtol)
             points.append((rtol, seconds, _error(states[ENSEMBLE // 2], exact)))
 
-    benchmark.pedantic(run, rounds=1, iterations=1)
+    benchmark.pedantic(run, rounds=ALTERNATIVE_ROUNDS, iterations=1)
     row = figures["points"][p["accuracy"]]
-    row["diffrax"], row["diffrax_how"] = _matched(points, row["error"])
+    row["diffrax"], row["diffrax_how"] = _matched(_best(points), row["error"])
 
 
 def _cli(args: list[str]) -> None:
