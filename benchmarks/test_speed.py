@@ -93,10 +93,10 @@ def test_sweep_swept_up_and_down(benchmark, figures, tmp_path):
 @numba.njit(fastmath=kernel.FASTMATH, error_model="numpy")
 def _lane_loop(L, steps):
     """``steps`` plain steps of the lane loop alone (no scalar finishing, no period ends)."""
+    for j in range(lanes.LANES):
+        L[lanes._KEND + j] = np.inf  # never at a stop
     for _ in range(steps):
-        lanes._lane_steps(L, lanes.LANES // lanes.GROUP)
-        for j in range(lanes.LANES):
-            L[lanes._K + j] = 1.0  # never at a stop
+        lanes._lane_steps(L, lanes.LANES // lanes.GROUP, 0.0)
 
 
 def test_lane_loop_alone(benchmark, figures):
@@ -108,7 +108,7 @@ def test_lane_loop_alone(benchmark, figures):
         L = lanes._table()
         for j in range(lanes.LANES):
             p = hs.resolve_parameters("paper", steps_per_period=1024, frequency=100.0 + 5 * j)
-            lanes._load(L, j, kernel.pack_parameters(p), kernel.initial_state(p))
+            lanes._load(L, j, kernel.pack_parameters(p), kernel.initial_state(p), 0.0)
             L[lanes._ON + j] = touching
         _lane_loop(L, 10)
         steps = 200_000

@@ -96,7 +96,7 @@ assert LANES == 2 * GROUP
 # LLVM see that the lane loop's loads and stores never overlap, so that it vectorizes.
 # Rows: the state of each lane's point...
 (_X, _V, _E, _VIMP, _CH, _ON, _FINE, _Q, _XMAX, _XMIN, _VMAX, _VPK, _FCP, _FC, _FCMAX, _NIMP,
- _SVIMP, _K, _KSYNC, _N, _S, _C,
+ _SVIMP, _K0, _KEND, _N, _S, _C,
  # ... the trial step of the lane loop and whether a lane needs scalar work ...
  _XN, _VN, _EN, _NEED, _XC, _VC, _EC,
  # ... the parameters the lane loop reads ...
@@ -126,8 +126,9 @@ def _table():
 
 
 @njit(**_JIT)
-def _load(L, j, p, y):
-    """Put the point of parameter row ``p`` and state ``y`` into lane ``j``, at t = 0."""
+def _load(L, j, p, y, it):
+    """Put the point of parameter row ``p`` and state ``y`` into lane ``j``, at t = 0, to
+    take its first step in iteration ``it`` of the lane loop."""
     n_steps = p[P_N]
     h = p[P_T] / n_steps
     L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j] = p[P_A], p[P_WN2], p[P_CM], p[P_THM]
@@ -151,13 +152,19 @@ def _load(L, j, p, y):
     L[_X + j], L[_V + j], L[_E + j], L[_VIMP + j], L[_CH + j] = x, v, e, vimp, ch
     L[_ON + j] = 1.0 if p[P_LOCATE] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
     L[_FINE + j] = 0.0
-    L[_K + j], L[_N + j] = 0.0, 0.0
-    _start_period(L, j)
+    L[_N + j] = 0.0
+    _start_period(L, j, it)
 
 
 @njit(**_JIT)
-def _start_period(L, j):
-    """Reset the per-period accumulators of lane ``j`` and the forcing phase to 0."""
+def _start_period(L, j, it):
+    """Reset the per-period accumulators of lane ``j`` and the forcing phase to 0, for a
+    period whose first step is taken in iteration ``it`` of the lane loop.
+
+    Every lane takes one step an iteration, so a lane's steps into its period are the
+    iterations since _K0; _KEND is the iteration at whose end the lane stops (a resync
+    of the forcing phase or the period's end): a row to compare with, not a count to
+    update, in the lane loop."""
     x, v, e = L[_X + j], L[_V + j], L[_E + j]
     d = max(x - L[_PG + j], 0.0)
     fc = L[_ON + j] * L[_PKH + j] * d * math.sqrt(d) * max(1.0 + L[_CH + j] * v, 0.0)
@@ -166,11 +173,12 @@ def _start_period(L, j):
     L[_FCP + j], L[_FC + j], L[_FCMAX + j] = fc, fc, fc
     L[_NIMP + j], L[_SVIMP + j] = 0.0, 0.0
     L[_S + j], L[_C + j] = 0.0, 1.0
-    L[_KSYNC + j] = min(_SYNC, L[_PNS + j])  # the next step to stop at: a resync or the end
+    L[_K0 + j] = it
+    L[_KEND + j] = it + min(_SYNC, L[_PNS + j]) - 1.0
 
 
 @njit(**_JIT)
-def _lane_steps(L, groups):
+def _lane_steps(L, groups, it):
     """One plain RK4 step of the lanes of the first ``groups`` groups, branch-free so that
     LLVM vectorizes it.
 
@@ -192,8 +200,8 @@ def _lane_steps(L, groups):
     if groups > 1:  # (else the second group is idle: no lane in contact)
         touching += _trial_group(L, GROUP)
     if touching == 0.0:
-        return _commit_steps(L, False)
-    return _commit_steps(L, True)
+        return _commit_steps(L, False, it)
+    return _commit_steps(L, True, it)
 
 
 @njit(inline="always", **_JIT)
@@ -244,8 +252,9 @@ def _trial_steps(L, j0, contact):
 
 
 @njit(inline="always", **_JIT)
-def _commit_steps(L, contact):
-    """Commit the trial step of every lane that needs nothing more (see _lane_steps).
+def _commit_steps(L, contact, it):
+    """Commit the trial step of every lane that needs nothing more (see _lane_steps), in
+    iteration ``it``.
 
     With ``contact=False`` no lane is in contact: every lane locates its switches (plain
     fixed steps keep the contact on), the force is 0 and stays so, and neither the force
@@ -262,7 +271,7 @@ def _commit_steps(L, contact):
         irc, thc = L[_PIRC + j], L[_PTHC + j]
         dv, dvn = -irc * e - thc * v, -irc * en - thc * vn
         dq = _v2_integral(e, dv, en, dvn, L[_PHH + j], L[_PH26 + j])
-        need = (v * vn <= 0.0) | (dv * dvn <= 0.0) | (L[_K + j] + 1.0 >= L[_KSYNC + j])
+        need = (v * vn <= 0.0) | (dv * dvn <= 0.0) | (it >= L[_KEND + j])
         if contact:
             on, h = L[_ON + j], L[_PH + j]
             d = max(xn - g, 0.0)
@@ -295,7 +304,6 @@ def _commit_steps(L, contact):
         L[_S + j] = s0 if need else s0 * cb + c0 * sb
         L[_C + j] = c0 if need else c0 * cb - s0 * sb
         L[_Q + j] += (1.0 - off) * dq
-        L[_K + j] += 1.0 - off
         L[_VMAX + j] = max(L[_VMAX + j], abs(v))
         marked += 1 if need else 0
     return marked, quarters
@@ -383,8 +391,9 @@ def _quarter_block(L, b):
 
 
 @njit(**_JIT)
-def _finish_step(L, j):
-    """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)."""
+def _finish_step(L, j, it):
+    """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)
+    in iteration ``it``."""
     x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
     xn, vn, en = L[_XN + j], L[_VN + j], L[_EN + j]
     A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
@@ -460,8 +469,8 @@ def _finish_step(L, j):
     L[_XMAX + j], L[_XMIN + j] = max(L[_XMAX + j], x, xn), min(L[_XMIN + j], x, xn)
     L[_VMAX + j], L[_VPK + j] = max(L[_VMAX + j], abs(vn)), max(L[_VPK + j], abs(e), abs(en))
     L[_FCMAX + j] = max(L[_FCMAX + j], fc, fcn)
-    k = L[_K + j] + 1.0
-    L[_K + j] = k
+    k0 = L[_K0 + j]
+    k = it + 1.0 - k0  # steps into the period after this one
     # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
     # every _SYNC steps (the rotation's rounding drifts); at k = n_steps the period ends
     # and _start_period sets it to 0.
@@ -474,16 +483,16 @@ def _finish_step(L, j):
         L[_S + j], L[_C + j] = s0 * cb + c0 * sb, c0 * cb - s0 * sb
     # the next step to stop at: a resync or the end (a lane in quarter steps is marked as
     # such by _commit_steps)
-    L[_KSYNC + j] = min(sync + _SYNC, n_steps)
+    L[_KEND + j] = k0 + min(sync + _SYNC, n_steps) - 1.0
 
 
 @njit(**_JIT)
-def _end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle):
-    """Book the period that lane ``j`` just finished; the status once it is done, else -1."""
+def _end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
+    """Book the period that lane ``j`` just finished in iteration ``it``; the status once
+    it is done, else -1."""
     x, v, e, q = L[_X + j], L[_V + j], L[_E + j], L[_Q + j]
     n = int(L[_N + j]) + 1
     L[_N + j] = n
-    L[_K + j] = 0.0
     if not (math.isfinite(x + v + e + q) and abs(x) <= p[P_XLIM]):
         return DIVERGED, 0
     slot = (n - 1) % MAX_ORBIT_PERIOD
@@ -493,7 +502,7 @@ def _end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle):
         L[_FCMAX + j], L[_NIMP + j], L[_SVIMP + j])
     r = n % ring_len
     ring[r, 0], ring[r, 1], ring[r, 2] = x, v, e
-    _start_period(L, j)
+    _start_period(L, j, it + 1.0)
     if settle:
         orbit = _orbit_period(ring, acc, gaps, n, ring_len, p[P_TOL], p[P_VPERX], p[P_EPERX])
         if orbit > 0 and n >= n_strobe:
@@ -547,17 +556,19 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         pt, taken = _next_point(params, states, successors, queue, taken, -1, False, control, b)
         if pt < 0:
             break
-        _take(L, j, params, states, pt, ring, acc, gaps)
+        _take(L, j, params, states, pt, ring, acc, gaps, 0.0)
         point[j] = pt
         active += 1
     groups = (active + GROUP - 1) // GROUP
+    it = -1.0  # the iteration of the lane loop
     while active > 0:
+        it += 1.0
         if n_series > 0:  # one point recorded at every step boundary
-            i = int(L[_N + 0] * L[_PNS + 0] + L[_K + 0])
+            i = int(L[_N + 0] * L[_PNS + 0] + it - L[_K0 + 0])
             if i < n_series:
                 series[i, 0], series[i, 1], series[i, 2] = L[_X + 0], L[_V + 0], L[_E + 0]
                 series[i, 3] = L[_FC + 0]
-        marked, quarters = _lane_steps(L, groups)
+        marked, quarters = _lane_steps(L, groups, it)
         if marked == 0:
             continue
         if quarters > 0:
@@ -566,12 +577,12 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         for j in range(lanes):
             if L[_NEED + j] == 0.0 or point[j] < 0:
                 continue
-            _finish_step(L, j)
-            if L[_K + j] < L[_PNS + j]:
+            _finish_step(L, j, it)
+            if it + 1.0 - L[_K0 + j] < L[_PNS + j]:
                 continue
             pt = point[j]
             status, orbit = _end_period(L, j, params[pt], ring[j], acc[j], gaps[j], ring_len,
-                                        n_strobe, settle)
+                                        n_strobe, settle, it)
             if status < 0:
                 continue
             if n_series > 0:
@@ -585,7 +596,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
             pt, taken = _next_point(params, states, successors, queue, taken, pt,
                                     status == DIVERGED, control, b)
             if pt >= 0:
-                _take(L, j, params, states, pt, ring, acc, gaps)
+                _take(L, j, params, states, pt, ring, acc, gaps, it + 1.0)
                 point[j] = pt
             else:
                 point[j] = -1
@@ -649,7 +660,7 @@ def _idle(L, j):
     v = 1, V = 1 (its increments are 0), with dV/dt = 1 (1/(R C_p) = -1, theta/C_p =
     0), no forcing, the stop at infinity, no contact and no period end."""
     L[_PA + j], L[_PKHM + j], L[_PNS + j], L[_PLOC + j], L[_ON + j] = 0.0, 0.0, np.inf, 1.0, 0.0
-    L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_KSYNC + j] = np.inf, -1.0, 0.0, np.inf
+    L[_PG + j], L[_PIRC + j], L[_PTHC + j], L[_KEND + j] = np.inf, -1.0, 0.0, np.inf
     L[_FC + j], L[_FCP + j] = 0.0, 0.0
     L[_X + j], L[_V + j], L[_E + j] = 0.0, 1.0, 1.0
     for r in range(_MXX, _MEC + LANES, LANES):
@@ -657,8 +668,8 @@ def _idle(L, j):
 
 
 @njit(**_JIT)
-def _take(L, j, params, states, pt, ring, acc, gaps):
-    _load(L, j, params[pt], states[pt])
+def _take(L, j, params, states, pt, ring, acc, gaps, it):
+    _load(L, j, params[pt], states[pt], it)
     ring[j, 0, 0], ring[j, 0, 1], ring[j, 0, 2] = L[_X + j], L[_V + j], L[_E + j]
     acc[j, :, :] = 0.0
     gaps[j, :, :] = np.inf

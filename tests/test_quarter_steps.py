@@ -30,7 +30,7 @@ def _run(points, marked):
     """The trial rows (x, v, V) after _quarter_steps with the lanes ``marked``."""
     L = lanes._table()
     for j, (p, y, phase) in enumerate(points):
-        lanes._load(L, j, kernel.pack_parameters(p), y)
+        lanes._load(L, j, kernel.pack_parameters(p), y, 0.0)
         L[lanes._S + j], L[lanes._C + j] = math.sin(phase), math.cos(phase)
         L[lanes._ON + j], L[lanes._FINE + j] = 1.0, 3.0
         L[lanes._NEED + j] = 1.0 if j in marked else 0.0
