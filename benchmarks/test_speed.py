@@ -42,10 +42,10 @@ from harvester_sweep import kernel, lanes
 
 ROOT = Path(__file__).resolve().parents[1]
 ENSEMBLE = 64
-# Every time is the best of some runs: this shared machine has spells of a few seconds in
-# which its second core runs slower (a two-thread run then takes up to 1.5x as long; a
-# one-thread run hardly changes), which can catch a whole ~3 s sweep. The alternatives (one
-# core) get ALTERNATIVE_ROUNDS too, the engine's per-point ensemble ENGINE_ROUNDS.
+# Every time is the best of some runs: on this shared machine one run of the same code
+# varies (the 64 x 64 sweep read 323-361 M steps/s in three single runs; back-to-back
+# two-thread ensembles have outliers up to 1.7x the median). The alternatives (one core)
+# get ALTERNATIVE_ROUNDS too, the engine's per-point ensemble ENGINE_ROUNDS.
 SWEEP_ROUNDS = 3
 ALTERNATIVE_ROUNDS = 3
 ENGINE_ROUNDS = 10
