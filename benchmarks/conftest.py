@@ -21,6 +21,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from cases import COLD_START_ROUNDS, SWEEP_ROUNDS  # noqa: E402
+
 FIGURES: dict = {}
 RESULT = ROOT / "benchmarks" / "results" / "speed.md"
 FLOPS_PER_STEP = 100  # one RK4 step of this system, counted by hand (4 stages + update)
@@ -86,7 +88,7 @@ def _table(f: dict) -> str:
     if "sweep_rate" in f:
         rows += [
             f"| 64 x 64 gap x frequency sweep of the paper scene, 1024 steps/period, end to end "
-            f"(run_sweep to netCDF; each sweep best of 3) | {f['sweep_wall']:.2f} s | "
+            f"(run_sweep to netCDF; each sweep best of {SWEEP_ROUNDS}) | {f['sweep_wall']:.2f} s | "
             f"{f['sweep_steps']:.3g} RK4 steps |",
             f"| ... RK4 steps per second | {f['sweep_rate'] / 1e6:.0f} M/s | "
             f"{share(f['sweep_rate'])} |",
@@ -121,7 +123,8 @@ def _table(f: dict) -> str:
                 rows.append(f"| ... {name} | skipped | {f['diffrax_skipped']} |")
     if "cold_start" in f:
         rows.append(f"| one-point sweep in a new process, on-disk cache warm "
-                    f"(`harvester-sweep run`, best of 3) | {f['cold_start']:.2f} s | |")
+                    f"(`harvester-sweep run`, best of {COLD_START_ROUNDS}) | "
+                    f"{f['cold_start']:.2f} s | |")
     if "million_wall" in f:
         day = time.strftime("%Y-%m-%d")
         rows.append(f"| 1e6-point gap x frequency x resistance x restitution sweep "

@@ -15,7 +15,7 @@ table, every ratio taken within this run, and writes benchmarks/results/speed.md
   default accuracy (1e-7) and at 1e-5; the final state is compared with
   tests/reference.py, and each alternative's time is interpolated (log-log, between the
   two tolerances that bracket it) to the engine's error;
-- each time the best of a few runs (see SWEEP_ROUNDS);
+- each time the best of a few runs (see cases.SWEEP_ROUNDS);
 - a new process running a one-point sweep with the on-disk cache warm;
 - with ``--million``: the 1e6-point 4-D sweep of examples/million_points.toml, its wall
   time and peak memory.
@@ -34,7 +34,17 @@ import numba
 import numpy as np
 import pytest
 from alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
-from cases import FREE, GRID, HALF, STEPS_PER_PERIOD, sweep_spec
+from cases import (
+    ALTERNATIVE_ROUNDS,
+    COLD_START_ROUNDS,
+    ENGINE_ROUNDS,
+    FREE,
+    GRID,
+    HALF,
+    STEPS_PER_PERIOD,
+    SWEEP_ROUNDS,
+    sweep_spec,
+)
 from reference import Reference
 
 import harvester_sweep as hs
@@ -42,13 +52,6 @@ from harvester_sweep import kernel, lanes
 
 ROOT = Path(__file__).resolve().parents[1]
 ENSEMBLE = 64
-# Every time is the best of some runs: on this shared machine one run of the same code
-# varies (the 64 x 64 sweep read 323-361 M steps/s in three single runs; back-to-back
-# two-thread ensembles have outliers up to 1.7x the median). The alternatives (one core)
-# get ALTERNATIVE_ROUNDS too, the engine's per-point ensemble ENGINE_ROUNDS.
-SWEEP_ROUNDS = 3
-ALTERNATIVE_ROUNDS = 3
-ENGINE_ROUNDS = 10
 
 
 def _sweep(grid: dict, output: Path, directions=None):
@@ -259,7 +262,7 @@ def test_one_point_sweep_in_a_new_process(benchmark, figures, tmp_path):
         _cli(args)
         times.append(time.perf_counter() - start)
 
-    benchmark.pedantic(run, rounds=3, iterations=1)
+    benchmark.pedantic(run, rounds=COLD_START_ROUNDS, iterations=1)
     figures["cold_start"] = min(times)
 
 
