@@ -159,23 +159,32 @@ def _derivatives(x, v, V, f, wn2, cm, thm, khm, g, ch, irc, thc, contact=True):
     return a, -irc * V - thc * v
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _hermite(y0, d0, y1, d1, h):
     """Coefficients B, C of the cubic Hermite y0 + h d0 s + B s^2 + C s^3 on s in [0, 1]."""
     return 3.0 * (y1 - y0) - h * (2.0 * d0 + d1), 2.0 * (y0 - y1) + h * (d0 + d1)
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _hermite_extremum(y0, d0, y1, d1, h):
-    """Value of the cubic Hermite interpolant where its derivative changes sign (d0 d1 <= 0)."""
+    """Value of the cubic Hermite interpolant where its derivative changes sign (d0 d1 <= 0).
+
+    The derivative h d0 + 2 B s + 3 C s^2 is a quadratic in s, solved in closed form (q,
+    the sum that does not cancel; the roots c / q, which is the one at a = 0, and q / a).
+    Of the two roots the one further inside [0, 1] is taken (a root at an end is one of
+    the step's ends, which callers take anyway), clamped to [0, 1] (rounding can put a
+    root at an end just outside)."""
     B, C = _hermite(y0, d0, y1, d1, h)
-    s = d0 / (d0 - d1) if d0 != d1 else 0.5
-    for _ in range(4):
-        dp = h * d0 + 2.0 * B * s + 3.0 * C * s * s
-        ddp = 2.0 * B + 6.0 * C * s
-        if ddp != 0.0:
-            s = min(max(s - dp / ddp, 0.0), 1.0)
-    return y0 + h * d0 * s + B * s * s + C * s * s * s
+    a, b, c = 3.0 * C, 2.0 * B, h * d0
+    r = math.sqrt(max(b * b - 4.0 * a * c, 0.0))
+    q = -0.5 * (b + r if b >= 0.0 else b - r)
+    s1, s2 = c / q, q / a
+    out1 = -s1 if s1 < 0.5 else s1 - 1.0  # how far outside [0, 1] (< 0: inside)
+    out2 = -s2 if s2 < 0.5 else s2 - 1.0
+    s = s2 if (out2 < out1) | (out1 != out1) else s1  # (a root 0 / 0 loses)
+    s = 0.0 if s < 0.0 else (1.0 if s > 1.0 else s)
+    s = s if s == s else 0.5  # (both 0 / 0: the derivative is 0 throughout)
+    return y0 + s * (c + s * (B + s * C))
 
 
 @njit(**_JIT)
