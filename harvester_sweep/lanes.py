@@ -393,7 +393,7 @@ def _quarter_block(L, b):
 @njit(**_JIT)
 def _finish_step(L, j, it):
     """Redo and finish the step of lane ``j`` that the lane loop marked (see _lane_steps)
-    in iteration ``it``."""
+    in iteration ``it``; whether it ends the lane's forcing period."""
     x, v, e, on, ch = L[_X + j], L[_V + j], L[_E + j], L[_ON + j], L[_CH + j]
     xn, vn, en = L[_XN + j], L[_VN + j], L[_EN + j]
     A, wn2, cm, thm, khm = L[_PA + j], L[_PWN2 + j], L[_PCM + j], L[_PTHM + j], L[_PKHM + j]
@@ -484,6 +484,7 @@ def _finish_step(L, j, it):
     # the next step to stop at: a resync or the end (a lane in quarter steps is marked as
     # such by _commit_steps)
     L[_KEND + j] = k0 + min(sync + _SYNC, n_steps) - 1.0
+    return k >= n_steps
 
 
 @njit(**_JIT)
@@ -577,8 +578,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         for j in range(lanes):
             if L[_NEED + j] == 0.0 or point[j] < 0:
                 continue
-            _finish_step(L, j, it)
-            if it + 1.0 - L[_K0 + j] < L[_PNS + j]:
+            if not _finish_step(L, j, it):
                 continue
             pt = point[j]
             status, orbit = _end_period(L, j, params[pt], ring[j], acc[j], gaps[j], ring_len,
