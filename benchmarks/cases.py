@@ -12,8 +12,9 @@ HALF = {"gap": {**GRID["gap"], "num": 32}, "frequency": GRID["frequency"]}
 STEPS_PER_PERIOD = 1024
 
 # Every time is the best of some runs: on this shared machine one run of the same code
-# varies (the 64 x 64 sweep read 323-361 M steps/s in three single runs; back-to-back
-# two-thread ensembles have outliers up to 1.7x the median). The alternatives (one core)
+# varies (the 64 x 64 sweep read 323-361 M steps/s in three single runs; of 30
+# back-to-back two-thread ensembles of 64 points at 1e-5, the slowest took 2.0x the
+# median, 0.278 against 0.136 ms a point, on 2026-11-21). The alternatives (one core)
 # get ALTERNATIVE_ROUNDS too, the engine's per-point ensemble ENGINE_ROUNDS, the one-point
 # sweep in a new process COLD_START_ROUNDS.
 SWEEP_ROUNDS = 3

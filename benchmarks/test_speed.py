@@ -15,7 +15,7 @@ table, every ratio taken within this run, and writes benchmarks/results/speed.md
   default accuracy (1e-7) and at 1e-5; the final state is compared with
   tests/reference.py, and each alternative's time is interpolated (log-log, between the
   two tolerances that bracket it) to the engine's error;
-- each time the best of a few runs (see cases.SWEEP_ROUNDS);
+- each time the best of a few runs (the counts and why: cases.py);
 - a new process running a one-point sweep with the on-disk cache warm;
 - with ``--million``: the 1e6-point 4-D sweep of examples/million_points.toml, its wall
   time and peak memory.
