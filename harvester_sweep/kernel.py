@@ -20,6 +20,9 @@ import math
 import numpy as np
 from numba import njit
 
+from .contact import damping_factor
+from .stepping import contact_damping_value
+
 # Bit-for-bit reproducible whichever lane, group or thread runs a point: no reassociation
 # (it would let a vector loop sum in another order than scalar code) and no approximate
 # functions. FMA contraction is allowed (about 15 % faster): LLVM fuses a multiply into an
@@ -87,9 +90,6 @@ _GAP_HISTORY = 4 * MAX_ORBIT_PERIOD  # periods of e_p(n) kept to estimate the de
 
 def pack_parameters(p: dict) -> np.ndarray:
     """Kernel parameter row from a validated parameter dict (SI units)."""
-    from .contact import damping_factor
-    from .stepping import contact_damping_value
-
     wn = 2.0 * math.pi * p["natural_frequency"]
     m = p["mass"]
     latched = p["contact_damping"] is None and p["impact_velocity_mode"] == "latched"

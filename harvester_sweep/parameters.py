@@ -9,8 +9,11 @@ from __future__ import annotations
 import functools
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
+from . import stepping
 from .contact import CONTACT_LAWS, IMPACT_VELOCITY_MODES
 from .materials import MATERIALS, hertz_stiffness_from_bodies
 
@@ -198,9 +201,9 @@ _TABLE_1 = dict(
 _D33 = 190e-12  # m/V, Table 1
 _K_TABLE_1 = _TABLE_1["mass"] * (2 * math.pi * _TABLE_1["natural_frequency"]) ** 2
 
-PRESETS: dict[str, dict] = {
-    "paper": dict(_TABLE_1, coupling=_K_TABLE_1 * _D33),
-    "strong_coupling": dict(_TABLE_1, coupling=3e-3),
+PRESETS: dict[str, Mapping] = {  # (read-only: a preset's checked values are kept)
+    "paper": MappingProxyType(dict(_TABLE_1, coupling=_K_TABLE_1 * _D33)),
+    "strong_coupling": MappingProxyType(dict(_TABLE_1, coupling=3e-3)),
 }
 
 #: What each preset assumes beyond its source, printed with every result.
@@ -235,7 +238,6 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
     """
     if preset is not None and preset not in PRESETS:
         raise ParameterError(f"preset {preset!r} is unknown: must be one of {', '.join(PRESETS)}")
-    values = dict(PRESETS[preset or "paper"])
     for name in overrides:
         if name not in PARAMETERS:
             raise ParameterError(
@@ -247,14 +249,29 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
                 "give hertz_stiffness [N/m^1.5] or stop_mass [kg], not both: "
                 "stop_mass computes hertz_stiffness from the materials"
             )
-    values.update(overrides)
-    checked = {name: _check(name, values[name]) for name in PARAMETERS}
+    checked = dict(_checked_preset(preset or "paper"))
+    for name, value in overrides.items():
+        checked[name] = _check(name, value)
     if checked["stop_mass"] is not None:
         checked["hertz_stiffness"] = hertz_stiffness_from_bodies(
             checked["mass"], checked["tip_material"], checked["stop_mass"], checked["stop_material"]
         )
     _check_step(checked)
     return checked
+
+
+def _checked_preset(preset: str) -> dict:
+    """The values of preset ``preset``, checked once for all the points of a sweep (again
+    if PRESETS[preset] is replaced); the caller copies it."""
+    source = PRESETS[preset]
+    known = _CHECKED_PRESETS.get(preset)
+    if known is None or known[0] is not source:
+        known = source, {name: PARAMETERS[name].check(source[name]) for name in PARAMETERS}
+        _CHECKED_PRESETS[preset] = known
+    return known[1]
+
+
+_CHECKED_PRESETS: dict = {}
 
 
 def _check(name: str, value):
@@ -284,8 +301,6 @@ def _check_step(p: dict) -> None:
     and keep the load circuit's exact decay rate 1/(R C_p) inside RK4's stability bound
     (errors); beyond the estimated contact bound it only warns, as that bound is an estimate.
     """
-    from . import stepping
-
     if p["max_periods"] is None:
         p["max_periods"] = stepping.auto_max_periods(p)
     if p["steps_per_period"] is None:

@@ -44,17 +44,18 @@ class TimeScales:
 
     def fastest(self) -> tuple[float, str]:
         """Largest rate and what it is, for stability."""
-        rates = {
-            "the natural frequency": self.natural,
-            "the forcing": self.forcing,
-            "the load circuit 1/(R C_p)": self.circuit,
-            f"the contact stiffness (linearised contact frequency {self.contact / 2 / math.pi:.3g} "
-            f"Hz at the expected penetration {self.penetration:.2g} m)": self.contact,
-            f"the contact damping (rate k_h delta^1.5 c_h / m at the expected penetration "
-            f"{self.penetration:.2g} m)": self.contact_damping,
-        }
-        what = max(rates, key=rates.get)
-        return rates[what], what
+        rates = (self.natural, self.forcing, self.circuit, self.contact, self.contact_damping)
+        rate = max(rates)
+        what = rates.index(rate)  # (the first of equals; described only once chosen)
+        if what < 3:
+            return rate, ("the natural frequency", "the forcing",
+                          "the load circuit 1/(R C_p)")[what]
+        if what == 3:
+            return rate, (f"the contact stiffness (linearised contact frequency "
+                          f"{self.contact / 2 / math.pi:.3g} Hz at the expected penetration "
+                          f"{self.penetration:.2g} m)")
+        return rate, (f"the contact damping (rate k_h delta^1.5 c_h / m at the expected "
+                      f"penetration {self.penetration:.2g} m)")
 
 
 def contact_damping_value(p: dict, impact_velocity: float) -> float:

@@ -132,17 +132,19 @@ def compute_chunk(spec: SweepSpec, chunk: int, threads: int | None = None,
     states = np.empty((n, length, 4))
     reverse = np.zeros(n, dtype=bool)
     refused = np.zeros((n, length), dtype=bool)
-    line_shape, line_axes = spec.line_shape, spec.line_axes
-    for i, line in enumerate(lines):
-        index = np.unravel_index(line, line_shape)
-        if spec.continuation:
-            reverse[i] = spec.directions[index[0]] == "down"
-            index = index[1:]
-        values = {a: spec.grid[a][j].item() for a, j in zip(line_axes, index)}
+    continuation = spec.continuation
+    # (Python numbers and indices, looked up once: this loop costs ~30 us a point, some 7 %
+    # of a sweep at 1024 steps a period)
+    index = [axis.tolist() for axis in np.unravel_index(np.asarray(lines), spec.line_shape)]
+    if continuation:
+        reverse[:] = [spec.directions[d] == "down" for d in index.pop(0)]
+    axes = [(a, spec.grid[a].tolist()) for a in spec.line_axes]
+    frequencies = spec.grid["frequency"].tolist() if continuation else []
+    for i in range(n):
+        values = {a: grid[j[i]] for (a, grid), j in zip(axes, index)}
         for step in range(length):
-            if spec.continuation:
-                j = length - 1 - step if reverse[i] else step
-                values["frequency"] = spec.grid["frequency"][j].item()
+            if continuation:
+                values["frequency"] = frequencies[length - 1 - step if reverse[i] else step]
             try:
                 point = spec.point_parameters(values)
             except TooStiffError:

@@ -94,3 +94,19 @@ def test_hertz_stiffness_matches_johnson_form():
     assert p["hertz_stiffness"] == pytest.approx(expected, rel=1e-12)
     with pytest.raises(ParameterError, match="not both"):
         resolve_parameters("paper", stop_mass=0.05, hertz_stiffness=1e9)
+
+
+def test_a_replaced_preset_is_checked_again(monkeypatch):
+    # A preset's values are checked once and kept (a sweep resolves every point from it):
+    # a preset put in PRESETS later, or replaced, is checked as itself; the built-in ones
+    # are read-only.
+    from harvester_sweep import PRESETS
+
+    assert resolve_parameters("paper")["mass"] == PRESETS["paper"]["mass"]
+    with pytest.raises(TypeError):
+        PRESETS["paper"]["mass"] = 1.0
+    monkeypatch.setitem(PRESETS, "paper", {**PRESETS["paper"], "mass": -1.0})
+    with pytest.raises(ParameterError, match=r"mass \[kg\] = -1"):
+        resolve_parameters("paper")
+    monkeypatch.setitem(PRESETS, "mine", {**PRESETS["strong_coupling"], "mass": 2e-3})
+    assert resolve_parameters("mine", gap=2e-6)["mass"] == 2e-3
