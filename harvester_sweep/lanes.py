@@ -1,8 +1,8 @@
 """Many points stepped together: the lane-blocked driver of the RK4 kernel.
 
-Each thread takes a queue of points and steps LANES of them at once. The plain RK4 step
-of every lane runs in branch-free loops over groups of GROUP lanes, which LLVM compiles
-to vector code: out of contact the step is linear, and is applied as the matrix it is
+Each thread takes points from one shared queue and steps LANES of them at once. The
+plain RK4 step of every lane runs in branch-free loops over groups of GROUP lanes, which
+LLVM compiles to vector code: out of contact the step is linear, and is applied as the matrix it is
 (kernel.free_step_map); a group with a lane in contact also runs the RK4 stages with the
 contact force. The rare steps that need more (a contact switch to locate, graded sub-steps next
 to a touch or a separation, an extremum or a force peak to place, the end of a forcing
@@ -11,11 +11,11 @@ period) are finished lane by lane with the scalar functions of
 in quarter steps, run first, in vector code on the lanes that take them, packed
 (_quarter_steps). A lane whose point is done takes the next point of its line (the next
 frequency of a continuation, from the state the point left) or else the first point of
-the next line of the queue, so that slow points do not hold a group back and no lane
-waits for other lines; once the queue is empty the points left are moved to the first
-lanes and an empty group is skipped.
+the next line of the queue, so that slow points do not hold a group back, no lane waits
+for other lines and the threads end together; once the queue is empty the points left
+are moved to the first lanes and an empty group is skipped.
 
-A point's result does not depend on its lane, its queue or the thread count: every lane
+A point's result does not depend on its lane, its thread or the thread count: every lane
 runs the same vector instructions (tests/test_reproducibility.py checks a point in
 different lanes and groups), which steps run scalar code is decided by the point's own
 state, and nothing is reassociated (see kernel.FASTMATH)."""
@@ -28,7 +28,9 @@ from pathlib import Path
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from .kernel import (
     _A_FCMAX,
@@ -539,11 +541,12 @@ def _output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
 
 @njit(**_JIT)
 def _run_queue(params, states, metrics, strobes, series, settle, queue, successors, control, b):
-    """Run the lines that start at the points ``queue`` (indices) to their ends, LANES at a
-    time: a lane whose point is done takes the point ``successors`` names next on its line
-    (-1: none), from the state it left, or else the next line of the queue, so that no
-    lane waits for the slowest point. ``control[b]`` counts the points done;
-    ``control[-1]`` set to nonzero stops taking points (see _next_point)."""
+    """Run lines that start at the points ``queue`` (indices) to their ends, LANES at a
+    time, as thread ``b``: a lane whose point is done takes the point ``successors`` names
+    next on its line (-1: none), from the state it left, or else the next line not yet
+    taken from the queue (by any thread), so that no lane waits for the slowest point.
+    ``control[b]`` counts the points done; ``control[-1]`` set to nonzero stops taking
+    points (see _next_point)."""
     lanes = min(LANES, len(queue))
     n_strobe = strobes.shape[1]
     ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
@@ -553,12 +556,11 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
     gaps = np.empty((lanes, _GAP_HISTORY, MAX_ORBIT_PERIOD + 1))
     point = np.full(lanes, -1)
     n_series = series.shape[0]
-    taken = 0
     for j in range(LANES):
         _idle(L, j)
     active = 0
     for j in range(lanes):  # the lanes that get no point are the last ones
-        pt, taken = _next_point(params, states, successors, queue, taken, -1, False, control, b)
+        pt = _next_point(params, states, successors, queue, -1, False, control, b)
         if pt < 0:
             break
         _take(L, j, params, states, pt, ring, acc, gaps, 0.0)
@@ -597,8 +599,8 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
             _output(L, j, params[pt], states[pt], metrics[pt], strobes[pt], ring[j], acc[j],
                     ring_len, status, orbit)
             control[b] += 1
-            pt, taken = _next_point(params, states, successors, queue, taken, pt,
-                                    status == DIVERGED, control, b)
+            pt = _next_point(params, states, successors, queue, pt, status == DIVERGED,
+                             control, b)
             if pt >= 0:
                 _take(L, j, params, states, pt, ring, acc, gaps, it + 1.0)
                 point[j] = pt
@@ -619,11 +621,12 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
 
 
 @njit(**_JIT)
-def _next_point(params, states, successors, queue, taken, done, diverged, control, b):
-    """The next point to run after point ``done`` (-1: none yet), and the heads of lines
-    taken from ``queue`` so far: ``done``'s successor, which starts from ``done``'s final
-    state (from its own initial state, the state at rest, when ``done`` ``diverged``), or
-    else the next line of the queue; -1 when none is left or ``control[-1]`` asks to stop.
+def _next_point(params, states, successors, queue, done, diverged, control, b):
+    """The next point to run after point ``done`` (-1: none yet): ``done``'s successor,
+    which starts from ``done``'s final state (from its own initial state, the state at
+    rest, when ``done`` ``diverged``), or else the next line of ``queue``, which every
+    thread takes from (``control[-2]``, the next to take, is shared); -1 when none is left
+    or ``control[-1]`` asks to stop.
 
     A point whose budget of periods (P_MAXP) is 0 is not run (refused before integration,
     its outputs left for the caller to write): its state passes on to its successor.
@@ -635,18 +638,36 @@ def _next_point(params, states, successors, queue, taken, done, diverged, contro
             states[pt, :] = states[done, :]
     while control[len(control) - 1] == 0:
         if pt < 0:
-            if taken == len(queue):
-                return -1, taken
+            taken = _fetch_add(control, len(control) - 2)
+            if taken >= len(queue):
+                return -1
             pt = queue[taken]
-            taken += 1
         if params[pt, P_MAXP] > 0.0:
-            return pt, taken
+            return pt
         control[b] += 1
         following = successors[pt]
         if following >= 0:
             states[following, :] = states[pt, :]
         pt = following
-    return -1, taken
+    return -1
+
+
+@intrinsic
+def _fetch_add(typingctx, counts, i):
+    """``counts[i] += 1`` as one atomic operation (int64 array); returns the value before."""
+    if not (isinstance(counts, types.Array) and counts.dtype == types.int64
+            and isinstance(i, types.Integer)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        array, index = args
+        ary = context.make_array(signature.args[0])(context, builder, array)
+        index = context.cast(builder, index, signature.args[1], types.intp)
+        pointer = cgutils.get_item_pointer(context, builder, signature.args[0], ary, [index])
+        return builder.atomic_rmw("add", pointer, context.get_constant(types.int64, 1),
+                                  "monotonic")
+
+    return types.int64(counts, i), codegen
 
 
 @njit(**_JIT)
@@ -701,14 +722,14 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
                   else np.ascontiguousarray(successors, dtype=np.int64))
     heads = _line_heads(successors, n)
-    # Lines dealt by forcing period (stable: in the callers' order within one): the lanes
+    # Lines taken by forcing period (stable: in the callers' order within one): the lanes
     # of a group then hold points whose contacts come at about the same step of the
     # period, so that fewer steps of a group run the contact stages (the kernel of a
     # 64 x 64 gap x frequency sweep built gap-major 3-4 % faster, best and median of 8
     # alternated runs).
     heads = heads[np.argsort(-params[heads, P_T], kind="stable")]
     queues = max(1, min(numba.get_num_threads(), len(heads)))
-    control = np.zeros(queues + 1, dtype=np.int64)  # points done per queue; stop
+    control = np.zeros(queues + 2, dtype=np.int64)  # points done per thread; next line; stop
     args = (params, states, metrics, strobes, successors, heads, control)
     if on_points is None:
         _run_queues(*args)
@@ -735,7 +756,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
                 on_points(done - reported)
                 reported = done
     finally:
-        control[queues] = 1  # a no-op once the kernel is done; else it stops taking points
+        control[-1] = 1  # a no-op once the kernel is done; else it stops taking points
         worker.join()
     if failure:
         raise failure[0]
@@ -767,13 +788,12 @@ def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
 
 @njit(parallel=True, nogil=True, **_JIT)
 def _run_queues(params, states, metrics, strobes, successors, heads, control):
-    """One queue of lines per thread, the lines dealt in turn (neighbours cost alike)."""
+    """Every thread takes lines from ``heads`` as its lanes need them (see _next_point),
+    so that the threads end together whatever the lines cost."""
     no_series = np.empty((0, 4))
-    queues = len(control) - 1
-    # (each queue a contiguous copy: with the strided slice, points ran about 2 % slower)
-    for b in prange(queues):
-        _run_queue(params, states, metrics, strobes, no_series, True, heads[b::queues].copy(),
-                   successors, control, b)
+    for b in prange(len(control) - 2):
+        _run_queue(params, states, metrics, strobes, no_series, True, heads, successors,
+                   control, b)
 
 
 def warm_up() -> None:
@@ -804,7 +824,7 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     series = np.empty((periods * n_steps + 1, 4))
     _run_queue(row[None, :], state.copy()[None, :], np.empty((1, NM)), np.empty((1, 0, 3)),
                series, False, np.zeros(1, dtype=np.int64), np.full(1, -1, dtype=np.int64),
-               np.zeros(2, dtype=np.int64), 0)
+               np.zeros(3, dtype=np.int64), 0)
     return series
 
 

@@ -112,6 +112,29 @@ def test_progress_is_reported_as_points_finish_and_an_error_stops_the_run(monkey
     assert 0 < run < n // 2  # the points under way were finished, no other was taken
 
 
+@numba.njit(parallel=True)
+def _take_all(counts, n):
+    """Two threads take n values each from counts[1] with lanes._fetch_add."""
+    taken = np.empty(2 * n, dtype=np.int64)
+    for thread in numba.prange(2):
+        for i in range(n):
+            taken[thread * n + i] = lanes._fetch_add(counts, 1)
+    return taken
+
+
+def test_threads_taking_from_one_counter_get_each_value_once():
+    # The threads take lines from one queue by this counter (lanes._next_point): a take
+    # that was not atomic would hand a line to two lanes, or lose one.
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    try:
+        counts = np.zeros(3, dtype=np.int64)
+        taken = _take_all(counts, 200_000)
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    assert counts[1] == 400_000 and counts[0] == counts[2] == 0
+    np.testing.assert_array_equal(np.sort(taken), np.arange(400_000))
+
+
 @pytest.mark.parametrize("successors", [[1, 1, -1], [1, 3, -1], [1, -2, -1], [1, -1],
                                         [-1, 2, 1], [-1, 1, -1]])
 def test_bad_successors_are_refused(successors):
