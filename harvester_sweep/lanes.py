@@ -726,20 +726,20 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     # of a group then hold points whose contacts come at about the same step of the
     # period, so that fewer steps of a group run the contact stages (the kernel of a
     # 64 x 64 gap x frequency sweep built gap-major 3-4 % faster, best and median of 8
-    # alternated runs).
+    # alternated runs, measured when each thread had a queue of its own).
     heads = heads[np.argsort(-params[heads, P_T], kind="stable")]
-    queues = max(1, min(numba.get_num_threads(), len(heads)))
-    control = np.zeros(queues + 2, dtype=np.int64)  # points done per thread; next line; stop
+    threads = max(1, min(numba.get_num_threads(), len(heads)))
+    control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
     args = (params, states, metrics, strobes, successors, heads, control)
     if on_points is None:
-        _run_queues(*args)
+        _run_threads(*args)
         return
     failure = []
 
     def run():
         try:
-            numba.set_num_threads(queues)  # (numba's thread count is per calling thread)
-            _run_queues(*args)
+            numba.set_num_threads(threads)  # (numba's thread count is per calling thread)
+            _run_threads(*args)
         except BaseException as error:  # raised again in the calling thread
             failure.append(error)
 
@@ -751,7 +751,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
         while running:  # (at least once: a kernel may end before it is first looked at)
             worker.join(_POLL)
             running = worker.is_alive()
-            done = int(control[:queues].sum())
+            done = int(control[:threads].sum())
             if done > reported:
                 on_points(done - reported)
                 reported = done
@@ -787,7 +787,7 @@ def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
 
 
 @njit(parallel=True, nogil=True, **_JIT)
-def _run_queues(params, states, metrics, strobes, successors, heads, control):
+def _run_threads(params, states, metrics, strobes, successors, heads, control):
     """Every thread takes lines from ``heads`` as its lanes need them (see _next_point),
     so that the threads end together whatever the lines cost."""
     no_series = np.empty((0, 4))
@@ -807,7 +807,7 @@ def cache_warm() -> bool:
     if _FLUSHED:
         return False
     try:
-        return Path(_run_queues._cache._cache_file._index_path).exists()
+        return Path(_run_threads._cache._cache_file._index_path).exists()
     except AttributeError:  # another numba's internals: say nothing
         return True
 
@@ -842,7 +842,7 @@ def _flush_if_kernel_changed() -> None:
 
     from . import kernel
 
-    cache = getattr(_run_queues, "_cache", None)
+    cache = getattr(_run_threads, "_cache", None)
     if cache is None or not hasattr(cache, "cache_path"):
         return
     stamp = sha256(Path(kernel.__file__).read_bytes()).hexdigest()
