@@ -1,6 +1,12 @@
-"""harvester_sweep: steady states of a piezoelectric harvester striking a Hertz bump stop."""
+"""harvester_sweep: steady states of a piezoelectric harvester striking a Hertz bump stop.
 
-from .parameters import PARAMETERS, PRESETS, ParameterError, resolve_parameters
+Data flows one way: parameters (validated, SI units) -> packing (the engine's rows) ->
+the engine (``_engine``, private) -> results -> datasets (xarray, CF netCDF) -> plots and
+the command line. The registry of outputs (``outputs``) names every metric and status.
+"""
+
+from .outputs import OUTPUTS, STATUSES
+from .parameters import PARAMETERS, PRESETS, ParameterError, TooStiffError, resolve_parameters
 from .scene import SceneResult, run_scene
 from .sweep import run_sweep
 from .sweep_file import SweepSpec, load_sweep
@@ -8,11 +14,14 @@ from .sweep_file import SweepSpec, load_sweep
 __version__ = "0.1.0"
 
 __all__ = [
+    "OUTPUTS",
     "PARAMETERS",
     "PRESETS",
+    "STATUSES",
     "ParameterError",
     "SceneResult",
     "SweepSpec",
+    "TooStiffError",
     "__version__",
     "load_sweep",
     "resolve_parameters",

@@ -76,9 +76,9 @@ def main(argv=None) -> int:
 
 
 def _announce_compilation() -> None:
-    from . import lanes
+    from ._engine import cache_warm
 
-    if not lanes.cache_warm():
+    if not cache_warm():
         print("harvester-sweep: compiling the RK4 kernel into numba's on-disk cache (first "
               "run only, about 30 s)", file=sys.stderr, flush=True)
 
@@ -107,7 +107,7 @@ def _scene(args) -> int:
         )
         return EXIT_DIVERGED
     if metrics["status"] == "not settled":
-        from .stepping import slowest_decay
+        from .timescales import slowest_decay
 
         rate, what = slowest_decay(result.parameters)
         print(f"harvester-sweep: warning: no steady state within max_periods = "
@@ -143,21 +143,25 @@ def _run(args) -> int:
               f"{args.output}.partial/: run the same command with --resume to finish",
               file=sys.stderr)
         return EXIT_INTERRUPTED
-    counts = [int((ds["status"] == code).sum()) for code in range(4)]
-    if counts[3]:
-        print(f"harvester-sweep: warning: {counts[3]} of {ds['status'].size} points were too "
-              "stiff for max_steps_per_period (status = 3, not run; 'harvester-sweep scene' "
-              "with their parameters says what needs which step)", file=sys.stderr)
-    if counts[2]:
-        print(f"harvester-sweep: warning: {counts[2]} of {ds['status'].size} points diverged "
-              "(status = 2, NaN metrics): raise steps_per_period", file=sys.stderr)
-    if counts[1]:
-        print(f"harvester-sweep: warning: {counts[1]} of {ds['status'].size} points did not "
-              "settle within max_periods (status = 1)", file=sys.stderr)
+    from .outputs import STATUSES
+
+    counts = {s.name: int((ds["status"] == s.code).sum()) for s in STATUSES}
+    for s in reversed(STATUSES[1:]):  # the worst first
+        if counts[s.name]:
+            print(f"harvester-sweep: warning: {counts[s.name]} of {ds['status'].size} points "
+                  f"{s.name} (status = {s.code}): {s.meaning}; {_ADVICE[s.name]}",
+                  file=sys.stderr)
     if not args.quiet:
-        print(f"harvester-sweep: {ds['status'].size} points ({counts[0]} settled) in "
+        print(f"harvester-sweep: {ds['status'].size} points ({counts['settled']} settled) in "
               f"{ds.attrs['run_time']:.3g} s of integration: {args.output}", file=sys.stderr)
     return 0
+
+
+_ADVICE = {  # what to do about the points of each status but settled
+    "not settled": "raise max_periods, or look for chaos in a bifurcation diagram",
+    "diverged": "raise steps_per_period",
+    "too stiff": "'harvester-sweep scene' with their parameters says what needs which step",
+}
 
 
 def _plot(args) -> int:
@@ -176,7 +180,7 @@ def _plot(args) -> int:
 
 
 def _table(result, preset: str) -> str:
-    from .datasets import METRICS
+    from .outputs import OUTPUTS
 
     p, m = result.parameters, result.metrics
     lines = [f"scene '{preset}': f = {p['frequency']:g} Hz, gap = {p['gap']:g} m, "
@@ -184,8 +188,10 @@ def _table(result, preset: str) -> str:
     lines += [f"  note: {note}" for note in result.notes]
     lines.append("")
     lines.append(f"  {'metric':<20} {'value':>14}  unit")
-    for name, (unit, long_name) in METRICS.items():
-        value = m[name]
+    for name, output in OUTPUTS.items():
+        if output.where == "sweep" or name == "status":
+            continue
+        value, unit, long_name = m[name], output.units, output.long_name
         if value is None:
             text = "none"
         elif isinstance(value, bool):

@@ -51,3 +51,13 @@ def contact_damping(law: str, restitution: float, impact_velocity: float) -> flo
         Approach velocity v_imp, > 0. [m/s]
     """
     return damping_factor(law, restitution) / impact_velocity
+
+
+def contact_damping_of(p: dict, impact_velocity: float) -> float:
+    """c_h [s/m] of a validated parameter set ``p``: ``contact_damping`` when given, else
+    its law at the fixed ``impact_velocity`` of ``p`` or, in latched mode, at the given
+    ``impact_velocity`` [m/s]."""
+    if p["contact_damping"] is not None:
+        return p["contact_damping"]
+    velocity = p["impact_velocity"] if p["impact_velocity_mode"] == "fixed" else impact_velocity
+    return contact_damping(p["contact_law"], p["restitution"], velocity)

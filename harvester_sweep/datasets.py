@@ -1,4 +1,5 @@
-"""xarray datasets and netCDF files: CF units and long names on every variable."""
+"""xarray datasets and netCDF files: CF units and long names on every variable, all from the
+registry of outputs (:mod:`harvester_sweep.outputs`)."""
 
 from __future__ import annotations
 
@@ -9,38 +10,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .parameters import PARAMETERS
-
-#: Metric name -> (CF units, long name). The names are those of ``scene --json``.
-METRICS: dict[str, tuple[str, str]] = {
-    "power": ("W", "mean electrical power V_rms^2/R over the orbit"),
-    "v_rms": ("V", "root mean square voltage over the orbit"),
-    "v_peak": ("V", "peak absolute voltage over the orbit"),
-    "power_peak": ("W", "peak instantaneous electrical power v_peak^2/R"),
-    "x_max": ("m", "largest tip displacement (positive towards the stop)"),
-    "x_min": ("m", "smallest tip displacement"),
-    "contact_force_max": ("N", "peak contact force"),
-    "impacts_per_period": ("1", "impacts per forcing period"),
-    "approach_velocity": ("m/s", "mean tip velocity at first touch of the stop"),
-    "orbit_period": ("1", "forcing periods per orbit (0 when not settled)"),
-    "converged": ("1", "steady state reached within the budget of periods (1) or not (0)"),
-    "periods_run": ("1", "forcing periods integrated"),
-    "error_estimate": ("1", "estimated relative error of power, v_peak, x_max and x_min: their "
-                       "change when the run is repeated at twice the steps per period"),
-    "steps_per_period": ("1", "RK4 steps per forcing period"),
-    "run_time": ("s", "wall-clock integration time"),
-}
-
-#: Time series variables of a recorded orbit: name -> (column, CF units, long name).
-SERIES: dict[str, tuple[int, str, str]] = {
-    "displacement": (0, "m", "tip displacement relative to the base x"),
-    "velocity": (1, "m/s", "tip velocity dx/dt"),
-    "voltage": (2, "V", "voltage across the load V"),
-    "contact_force": (3, "N", "contact force of the stop F_c"),
-}
-
-STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3], dtype="i1"),
-                "flag_meanings": "settled not_settled diverged too_stiff"}
+from .chunks import STROBES
+from .outputs import OUTPUTS, SERIES, STATUS_NAMES
+from .parameters import PARAMETERS, PRESET_NOTES
 
 
 def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Dataset:
@@ -48,12 +20,9 @@ def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Datase
     n = values.shape[0]
     step = 1.0 / (parameters["frequency"] * parameters["steps_per_period"])
     time = t0 + step * np.arange(n)
-    data = {
-        name: ("time", values[:, col], {"units": units, "long_name": long})
-        for name, (col, units, long) in SERIES.items()
-    }
-    data["instantaneous_power"] = ("time", values[:, 2] ** 2 / parameters["resistance"],
-                     {"units": "W", "long_name": "instantaneous electrical power V^2/R"})
+    columns = dict(zip(SERIES, values.T))
+    columns["instantaneous_power"] = columns["voltage"] ** 2 / parameters["resistance"]
+    data = {name: ("time", columns[name], output.attrs) for name, output in SERIES.items()}
     coords = {"time": ("time", time, {"units": "s", "long_name": "time since the start"})}
     return xr.Dataset(data, coords=coords)
 
@@ -61,18 +30,85 @@ def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Datase
 def scene_dataset(result, series: xr.Dataset) -> xr.Dataset:
     """One scene: its metrics (scalars), the series of its last orbit periods, its parameters."""
     ds = series.copy()
-    for name, (units, long) in METRICS.items():
+    for name, output in OUTPUTS.items():
+        if output.where == "sweep":
+            continue
         value = result.metrics[name]
-        attrs = {"units": units, "long_name": long}
-        if name == "approach_velocity":
-            attrs["comment"] = "NaN when the orbit has no impact (impacts_per_period = 0)"
-        if name == "error_estimate":
-            attrs["comment"] = "NaN when the point did not settle"
-        ds[name] = ((), np.nan if value is None else float(value), attrs)
-    code = ["settled", "not settled", "diverged", "too stiff"].index(result.metrics["status"])
-    ds["status"] = ((), np.int8(code), {"units": "1", "long_name": "outcome of the run",
-                                        **STATUS_FLAGS})
+        if name == "status":
+            value = STATUS_NAMES.index(value)
+        ds[name] = ((), np.array(np.nan if value is None else value, dtype=output.dtype),
+                    output.attrs)
     ds.attrs.update(run_attributes(result.parameters, result.notes))
+    return ds
+
+
+def sweep_dataset(spec, chunks: list) -> xr.Dataset:
+    """Assemble the outputs of every chunk (in order) into the sweep's Dataset.
+
+    ``spec`` is a :class:`harvester_sweep.sweep_file.SweepSpec`; each chunk a dict of
+    ``metrics`` (lines, points per line, len(spec.metrics)), ``strobe`` (..., samples, 2:
+    x [m], V [V]), ``error_estimate`` and ``run_time`` [s] (see sweep.compute_chunk).
+    Variables: the metrics of ``spec.metrics``, ``error_estimate``, ``strobe_displacement``
+    and ``strobe_voltage`` over ``sample`` when stroboscopic samples were asked; units,
+    long names, dtypes and flags from the registry (:mod:`harvester_sweep.outputs`).
+    Global attributes: the fixed parameters with their units, the sweep itself, the
+    package version, the date and the integration time [s].
+    """
+    metrics = np.concatenate([c["metrics"] for c in chunks])
+    strobe = np.concatenate([c["strobe"] for c in chunks])
+    shape = spec.line_shape + (spec.line_length,)
+    dims = (("direction",) if spec.continuation else ()) + spec.line_axes + ("frequency",)
+    order = (("direction",) if spec.continuation else ()) + tuple(spec.grid)
+    if not spec.continuation:
+        shape, dims = shape[:-1], dims[:-1]  # lines of one point
+
+    def variable(values, attrs, extra=()):
+        da = xr.DataArray(values.reshape(shape + values.shape[2:]), dims=dims + extra,
+                          attrs=attrs)
+        return da.transpose(*order, *extra)
+
+    data = {}
+    for k, name in enumerate(spec.metrics):
+        output = OUTPUTS[name]
+        data[name] = variable(metrics[..., k].astype(output.dtype), output.attrs)
+    if spec.error_estimate != "none":
+        errors = np.concatenate([c["error_estimate"] for c in chunks])
+        output = OUTPUTS["error_estimate"]
+        data[output.name] = variable(errors, {
+            **output.attrs, "comment": f"points estimated: {spec.error_estimate}; "
+                                       + output.comment})
+    if spec.samples:
+        for col, name in enumerate(STROBES):  # (the columns of a chunk's strobe)
+            data[name] = variable(strobe[..., col], OUTPUTS[name].attrs, extra=("sample",))
+
+    coords = {}
+    for name, values in spec.grid.items():
+        unit = PARAMETERS[name].unit
+        coords[name] = (name, values, {"units": unit, "long_name": PARAMETERS[name].description,
+                                       "grid_spacing": spec.spacing[name]})
+    if spec.continuation:
+        coords["direction"] = ("direction", list(spec.directions), {
+            "long_name": "direction of the frequency continuation: each point starts from the "
+                         "final state of the previous frequency (up: increasing)"})
+    if spec.samples:
+        coords["sample"] = ("sample", np.arange(1 - spec.samples, 1), {
+            "units": "1", "long_name": "forcing periods before the end of the run (0: last)"})
+
+    fixed = {name: value for name, value in spec.base.items() if name not in spec.grid}
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec.preset, [])))
+    ds.attrs.update({
+        "title": "harvester_sweep sweep of steady states of a piezoelectric harvester with a "
+                 "Hertz stop",
+        "preset": spec.preset,
+        "grid_axes": " ".join(spec.grid),
+        "directions": " ".join(spec.directions) or "none (every point from rest)",
+        "sweep": spec.canonical(),
+        "sweep_sha256": spec.digest(),
+        "run_time": float(sum(c["run_time"] for c in chunks)),
+        "run_time_units": "s",
+        "run_time_comment": "integration time summed over the chunks",
+    })
     return ds
 
 

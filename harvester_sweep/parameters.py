@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from . import stepping
+from . import timescales
 from .contact import CONTACT_LAWS, IMPACT_VELOCITY_MODES
 from .materials import MATERIALS, hertz_stiffness_from_bodies
 
@@ -23,8 +23,9 @@ class ParameterError(ValueError):
 
 
 class TooStiffError(ParameterError):
-    """The automatic step of a point would exceed max_steps_per_period (a sweep flags the
-    point with status ``too_stiff`` and goes on)."""
+    """A point's step would exceed max_steps_per_period: refused before integration (raised
+    by harvester_sweep.packing for a scene; a sweep flags the point ``too stiff`` and goes
+    on)."""
 
 
 @dataclass(frozen=True)
@@ -302,18 +303,10 @@ def _check_step(p: dict) -> None:
     (errors); beyond the estimated contact bound it only warns, as that bound is an estimate.
     """
     if p["max_periods"] is None:
-        p["max_periods"] = stepping.auto_max_periods(p)
+        p["max_periods"] = timescales.auto_max_periods(p)
     if p["steps_per_period"] is None:
-        steps = stepping.auto_steps_per_period(p)
-        if steps > p["max_steps_per_period"]:
-            rate, what = stepping.time_scales(p).fastest()
-            raise TooStiffError(
-                f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
-                f"{1 / (p['frequency'] * steps):.3g} s, {steps} steps per period, about "
-                f"{stepping.run_time_estimate(steps):.0f} s per point; raise "
-                f"max_steps_per_period [-] (now {p['max_steps_per_period']}) to run it anyway"
-            )
-        p["steps_per_period"] = steps
+        # (a step beyond max_steps_per_period is kept: packing refuses the point)
+        p["steps_per_period"] = timescales.auto_steps_per_period(p)
         return
     fastest = max(p["frequency"], p["natural_frequency"])
     step = 1.0 / (p["frequency"] * p["steps_per_period"])
@@ -325,7 +318,7 @@ def _check_step(p: dict) -> None:
             f">= {needed}"
         )
     tau = p["resistance"] * p["capacitance"]
-    bound = stepping.RK4_STABILITY
+    bound = timescales.RK4_STABILITY
     needed = math.ceil(1.0 / (p["frequency"] * bound * tau))
     if p["steps_per_period"] < needed:
         raise ParameterError(
@@ -334,7 +327,7 @@ def _check_step(p: dict) -> None:
             f"(resistance {p['resistance']:g} Ohm, capacitance {p['capacitance']:g} F): must be "
             f"an integer >= {needed}"
         )
-    needed, what = stepping.stability_steps(p)
+    needed, what = timescales.stability_steps(p)
     if p["steps_per_period"] < needed:
         limit = 1.0 / (p["frequency"] * needed)
         warnings.warn(

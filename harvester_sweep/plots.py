@@ -5,6 +5,9 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from .outputs import OUTPUTS, STATUS_NAMES
+from .parameters import PARAMETERS, ParameterError
+
 _PREFIXES = [(1e-18, "a"), (1e-15, "f"), (1e-12, "p"), (1e-9, "n"), (1e-6, "\u00b5"),
              (1e-3, "m"), (1.0, ""), (1e3, "k")]
 
@@ -42,7 +45,7 @@ def plot_scene(ds, path=None) -> Figure:
             ax.axhline(gap / scale, color="C3", ls="--", lw=1.0, label=f"stop (gap {gap:g} m)")
             ax.legend(loc="lower right", fontsize="small")
     axes[-1].set_xlabel(f"time from t = {float(ds['time'].values[0]):.4g} s [ms]")
-    status = str(["settled", "not settled", "diverged"][int(ds["status"])])
+    status = STATUS_NAMES[int(ds["status"])]
     fig.suptitle(
         f"f = {ds.attrs['frequency']:g} Hz, gap = {ds.attrs['gap']:g} m, "
         f"R = {ds.attrs['resistance']:g} Ohm: {status}, orbit period {int(ds['orbit_period'])}, "
@@ -71,8 +74,6 @@ def plot_sweep(ds, path=None) -> Figure:
     ParameterError
         For a dataset with more than two grid axes: select a slice first (``ds.isel``).
     """
-    from .parameters import ParameterError
-
     axes_names = [d for d in ds.dims if d not in ("direction", "sample")]
     if len(axes_names) == 1:
         return _save(_plot_lines(ds, axes_names[0]), path)
@@ -93,7 +94,10 @@ def _directions(ds) -> list:
 
 
 def _label(ds, name: str, prefix: str = "") -> str:
-    unit = ds[name].attrs.get("units", "1")
+    """``name [unit]`` of an output (the registry's) or a grid axis (its parameter's)."""
+    if name in OUTPUTS:
+        return OUTPUTS[name].label(prefix)
+    unit = PARAMETERS[name].unit if name in PARAMETERS else ds[name].attrs.get("units", "1")
     return f"{name} [{prefix}{'-' if unit == '1' else unit}]"
 
 
@@ -105,7 +109,6 @@ def _set_scale(ax, ds, name: str, axis: str = "x") -> None:
 def _plot_lines(ds, axis: str) -> Figure:
     """Responses (and bifurcation diagrams) against one grid axis."""
     from .linear import linear_response
-    from .parameters import PARAMETERS
 
     responses = [name for name in ("power", "x_max") if name in ds]
     strobes = [name for name in ("strobe_displacement", "strobe_voltage") if name in ds]
@@ -188,8 +191,6 @@ def _plot_maps(ds, axes_names: list) -> Figure:
 
 
 def _title(ds, axes_names: list) -> str:
-    from .parameters import PARAMETERS
-
     shown = [f"{n} = {ds.attrs[n]:g} {PARAMETERS[n].unit}" for n in ("gap", "resistance",
                                                                     "frequency")
              if n in ds.attrs and n not in axes_names and not isinstance(ds.attrs[n], str)]

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import kernel, lanes
+from . import _engine
+from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PRESET_NOTES, resolve_parameters
-from .stepping import halved, halving_error
+from .results import solve
 
 
 @dataclass
@@ -22,10 +22,10 @@ class SceneResult:
     parameters : dict
         The full, validated parameter set (SI units, see ``PARAMETERS``).
     metrics : dict
-        Metric name -> value (see ``datasets.METRICS`` for units); ``status`` is one of
+        Metric name -> value (units: ``outputs.OUTPUTS``); ``status`` is one of
         ``"settled"``, ``"not settled"``, ``"diverged"``; ``approach_velocity`` is None when
         the orbit has no impact; ``error_estimate`` (step halving, see
-        ``stepping.halving_error``) is None when the point did not settle.
+        ``results.halving_error``) is None when the point did not settle.
     state : numpy.ndarray
         State ``(x [m], v [m/s], V [V], v_imp [m/s])`` at the last period boundary.
     notes : list of str
@@ -58,8 +58,7 @@ class SceneResult:
         if periods is None:
             orbit = max(int(self.metrics["orbit_period"]), 1)
             periods = orbit * math.ceil(4 / orbit)
-        row = kernel.pack_parameters(self.parameters)
-        values = lanes.record_series(row, self.state, periods)
+        values = _engine.record_series(pack_parameters(self.parameters), self.state, periods)
         t0 = self.metrics["periods_run"] / self.parameters["frequency"]
         return series_dataset(values, t0, self.parameters)
 
@@ -99,37 +98,14 @@ def run_scene(preset: str | None = "paper", **parameters) -> SceneResult:
     Raises
     ------
     ParameterError
-        Before any integration, for an unknown name or a value out of range.
+        Before any integration, for an unknown name or a value out of range; TooStiffError
+        for a point whose step would exceed max_steps_per_period.
     """
     values = resolve_parameters(preset, **parameters)
-    row = kernel.pack_parameters(values)
-    state = kernel.initial_state(values)
-    metrics = np.empty(kernel.NM)
-    lanes.warm_up()  # compile or load from the on-disk cache outside the timing
-    start = time.perf_counter()
-    lanes.run_points(row[None, :], state[None, :], metrics[None, :], np.empty((1, 0, 3)))
-    run_time = time.perf_counter() - start
-    error = np.nan
-    if metrics[kernel.M_STATUS] == kernel.SETTLED:  # step halving, from the settled state
-        fine = np.empty(kernel.NM)
-        lanes.run_points(kernel.pack_parameters(halved(values))[None, :], state[None, :].copy(),
-                          fine[None, :], np.empty((1, 0, 3)))
-        error = halving_error(metrics, fine)
-    out = _metrics_dict(metrics, values, run_time, error)
-    return SceneResult(values, out, state, PRESET_NOTES.get(preset or "paper", []))
-
-
-def _metrics_dict(metrics: np.ndarray, values: dict, run_time: float, error) -> dict:
-    out = {name: float(metrics[i]) for i, name in enumerate(kernel.METRIC_NAMES)}
-    out["error_estimate"] = float(error)
-    status = int(out["status"])
-    out["status"] = kernel.STATUS_NAMES[status]
-    out["converged"] = status == kernel.SETTLED
-    for name in ("orbit_period", "periods_run"):
-        out[name] = int(out[name])
+    check_runnable(values)  # too stiff: refused before integration
+    packed = pack_points([values])
+    results = solve(packed, estimated=np.ones(1, dtype=bool))
+    out = results.point(0)
     out["steps_per_period"] = values["steps_per_period"]
-    out["run_time"] = run_time
-    for name, value in out.items():
-        if isinstance(value, float) and not math.isfinite(value):
-            out[name] = None  # JSON null: no impact (approach_velocity) or diverged
-    return out
+    out["run_time"] = results.run_time
+    return SceneResult(values, out, results.finals[0], PRESET_NOTES.get(preset or "paper", []))

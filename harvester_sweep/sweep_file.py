@@ -34,8 +34,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import kernel, lanes
-from .parameters import PARAMETERS, ParameterError, TooStiffError, resolve_parameters
+from ._engine import SOURCE_DIGEST
+from .outputs import ENGINE_METRICS
+from .parameters import PARAMETERS, ParameterError, resolve_parameters
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -45,7 +46,7 @@ else:  # pragma: no cover - Python 3.10
 #: What ``sweep.outputs`` may name: the kernel metrics, and "strobe" for bifurcation diagrams.
 #: ``status`` and ``periods_run`` are always stored: without them no value can be trusted.
 ALWAYS_STORED = ("status", "periods_run")
-METRIC_OUTPUTS = tuple(name for name in kernel.METRIC_NAMES if name not in ALWAYS_STORED)
+METRIC_OUTPUTS = tuple(name for name in ENGINE_METRICS if name not in ALWAYS_STORED)
 OUTPUTS = METRIC_OUTPUTS + ("strobe",)
 DIRECTIONS = ("up", "down")
 DEFAULT_SAMPLES = 32
@@ -90,6 +91,9 @@ class SweepSpec:
     error_estimate : str
         Which points get a step-halving error estimate: ``"sample"`` (about
         ERROR_SAMPLE_POINTS spread over the grid), ``"all"`` or ``"none"``.
+    base : dict
+        The validated parameters of ``preset`` with ``fixed`` (SI units), resolved once:
+        what the grid's points share.
     """
 
     preset: str
@@ -101,6 +105,7 @@ class SweepSpec:
     samples: int
     chunk_size: int
     error_estimate: str = "sample"
+    base: dict = None
 
     @property
     def continuation(self) -> bool:
@@ -159,12 +164,11 @@ class SweepSpec:
         return json.dumps(
             {
                 "version": __version__,
-                # Chunks made by another kernel would not match: a development install
-                # changes the kernel without changing the version.
-                "kernel_sha256": hashlib.sha256(b"".join(
-                    Path(module.__file__).read_bytes() for module in (kernel, lanes))).hexdigest(),
+                # Chunks made by another engine would not match: a development install
+                # changes the engine without changing the version.
+                "kernel_sha256": SOURCE_DIGEST,
                 "preset": self.preset,
-                "parameters": resolve_parameters(self.preset, **self.fixed),
+                "parameters": self.base,
                 "grid": {name: values.tolist() for name, values in self.grid.items()},
                 "directions": list(self.directions),
                 "metrics": list(self.metrics),
@@ -233,7 +237,7 @@ def load_sweep(source) -> SweepSpec:
     chunk_size = _integer(options, "chunk_size", max(
         DEFAULT_CHUNK_SIZE, min(DEFAULT_CHUNK_LINES * line_length, DEFAULT_CHUNK_CAP)))
     spec = SweepSpec(preset, fixed, grid, spacing, directions, metrics + ALWAYS_STORED, samples,
-                     chunk_size, error_estimate)
+                     chunk_size, error_estimate, base)
     _check_corners(spec)
     if samples:
         budget = int(grid["max_periods"].min()) if "max_periods" in grid else base["max_periods"]
@@ -356,9 +360,7 @@ def _check_corners(spec: SweepSpec) -> None:
     for corner in itertools.product(*(values for _, values in extremes)):
         values = {name: value for (name, _), value in zip(extremes, corner)}
         try:
-            spec.point_parameters(values)
-        except TooStiffError:
-            pass  # flagged per point (status too_stiff); the other points run
+            spec.point_parameters(values)  # (a point too stiff is flagged, not refused here)
         except ParameterError as error:
             at = ", ".join(f"{name} = {value:g}" for name, value in values.items())
             raise ParameterError(f"grid: at the grid point {at}: {error}") from None

@@ -15,9 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
-from .contact import contact_damping
+from .contact import contact_damping_of
 
 #: |h lambda| that RK4 keeps stable (2.78 on the negative real axis, 2.83 on the imaginary).
 RK4_STABILITY = 2.5
@@ -58,14 +56,6 @@ class TimeScales:
                       f"penetration {self.penetration:.2g} m)")
 
 
-def contact_damping_value(p: dict, impact_velocity: float) -> float:
-    """c_h [s/m] of a point: given, fixed-velocity law, or the law at ``impact_velocity``."""
-    if p["contact_damping"] is not None:
-        return p["contact_damping"]
-    velocity = p["impact_velocity"] if p["impact_velocity_mode"] == "fixed" else impact_velocity
-    return contact_damping(p["contact_law"], p["restitution"], velocity)
-
-
 def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
     m = p["mass"]
@@ -86,7 +76,7 @@ def time_scales(p: dict) -> TimeScales:
     # The stop only takes energy out: the motion stays within the linear resonance amplitude.
     reachable = p["gap"] < 2.0 * v / min(w, wn)
     if kh > 0 and reachable:
-        ch = contact_damping_value(p, v)
+        ch = contact_damping_of(p, v)
         delta = (5 * m * v * v / (4 * kh)) ** 0.4
         if ch > 0:
             delta = min(delta, (1.25 * m * v / (kh * ch)) ** 0.4)
@@ -148,37 +138,3 @@ def auto_max_periods(p: dict) -> int:
         return 1_000_000
     needed = 1.5 * math.log(1 / p["settle_tolerance"]) * p["frequency"] / rate + 100
     return int(min(max(needed, 1000), 1_000_000))
-
-
-def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
-    """Error estimate [-] of metrics from a run and its rerun at twice the steps per period.
-
-    ``coarse`` and ``fine`` hold kernel metric rows (``kernel.METRIC_NAMES``) of the same
-    points. The estimate is the largest relative change of ``power`` and ``v_peak`` and of
-    ``x_max`` and ``x_min`` (relative to the displacement amplitude): with RK4's 4th order
-    the coarse run's own error is about 16/15 of it. NaN where either run did not settle.
-    """
-    from . import kernel
-
-    coarse, fine = np.asarray(coarse), np.asarray(fine)
-
-    def change(index, scale):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ratio = np.abs(coarse[..., index] - fine[..., index]) / scale
-        return np.where(scale > 0, ratio, 0.0)
-
-    amplitude = 0.5 * (fine[..., kernel.M_XMAX] - fine[..., kernel.M_XMIN])
-    error = np.maximum.reduce([
-        change(kernel.M_POWER, np.abs(fine[..., kernel.M_POWER])),
-        change(kernel.M_VPEAK, np.abs(fine[..., kernel.M_VPEAK])),
-        change(kernel.M_XMAX, amplitude),
-        change(kernel.M_XMIN, amplitude),
-    ])
-    settled = ((coarse[..., kernel.M_STATUS] == kernel.SETTLED)
-               & (fine[..., kernel.M_STATUS] == kernel.SETTLED))
-    return np.where(settled, error, np.nan)
-
-
-def halved(parameters: dict) -> dict:
-    """The same point at twice the steps per period (for :func:`halving_error`)."""
-    return dict(parameters, steps_per_period=2 * parameters["steps_per_period"])

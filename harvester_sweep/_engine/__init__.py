@@ -1,0 +1,60 @@
+"""The engine: many points of the harvester integrated to steady state by a fixed-step
+RK4 with located contact switches, in Numba.
+
+Private, numba and numpy only: nothing here imports from the rest of harvester_sweep.
+The layers above hand it float arrays laid out by :mod:`.layouts` (parameter rows from
+``harvester_sweep.packing``, states) and read back metric rows, stroboscopic samples and
+final states. One concept per module:
+
+- ``flags``: how every function is compiled;
+- ``layouts``: every row layout, from named fields;
+- ``model``: the model's state, right-hand side, contact and contact-free step;
+- ``hermite``: the cubic Hermite interpolant of a step (extrema, crossings, int V^2 dt);
+- ``rk4``: RK4 over parts of a step and contact switches located inside it;
+- ``steady``: orbit periods from the stroboscopic samples, metrics of the last orbit;
+- ``lanes``: the lane table, its vector step loop and the scalar finish of marked steps;
+- ``scheduler``: lines, the shared queue, threads and progress (:func:`run_points`);
+- ``cache``: numba's on-disk cache kept in step with this source.
+"""
+
+from . import cache, hermite, lanes, model, rk4, scheduler, steady
+from .cache import SOURCE_DIGEST
+from .layouts import (
+    ACC,
+    LANE,
+    LANES,
+    METRIC,
+    N_STROBE,
+    N_VALUES,
+    PARAM,
+    SERIES,
+    STATE,
+    STATUS,
+)
+from .scheduler import record_series, run_points, warm_up
+
+cache.flush_if_changed(scheduler._run_threads, (hermite, lanes, model, rk4, scheduler, steady))
+
+
+def cache_warm() -> bool:
+    """Whether the engine is in numba's on-disk cache (else its first run compiles it)."""
+    return cache.is_warm(scheduler._run_threads)
+
+
+__all__ = [
+    "ACC",
+    "LANE",
+    "LANES",
+    "METRIC",
+    "N_STROBE",
+    "N_VALUES",
+    "PARAM",
+    "SERIES",
+    "SOURCE_DIGEST",
+    "STATE",
+    "STATUS",
+    "cache_warm",
+    "record_series",
+    "run_points",
+    "warm_up",
+]

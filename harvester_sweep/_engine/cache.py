@@ -1,0 +1,66 @@
+"""numba's on-disk cache of the engine, kept in step with the engine's source.
+
+numba checks a cached function against the stamp of the file that defines it, but the
+engine's entry points inline functions of every file of this package: after an edit of
+one of those alone (an editable install), they would run the old code. A digest of the
+whole engine's source is kept beside the cache; when it differs, every cached function of
+the engine is dropped and compiled again. The same digest identifies the engine in a
+sweep's hash, so that a partial result is never resumed by another engine.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numba
+
+_HERE = Path(__file__).parent
+
+
+def source_digest() -> str:
+    """SHA-256 of the engine's source files, in name order."""
+    digest = hashlib.sha256()
+    for path in sorted(_HERE.glob("*.py")):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
+SOURCE_DIGEST = source_digest()
+_FLUSHED: list = []  # not empty once this process dropped the cache
+
+
+def _dispatchers(modules):
+    for module in modules:
+        for value in vars(module).values():
+            if isinstance(value, numba.core.registry.CPUDispatcher):
+                yield value
+
+
+def flush_if_changed(entry, modules) -> None:
+    """Drop the cached machine code of every jitted function of ``modules`` when the
+    engine's source has changed since ``entry`` (a dispatcher) was cached."""
+    cache = getattr(entry, "_cache", None)
+    if cache is None or not hasattr(cache, "cache_path"):
+        return
+    marker = Path(cache.cache_path) / "engine-source-sha256"
+    try:
+        if marker.exists() and marker.read_text() == SOURCE_DIGEST:
+            return
+        for dispatcher in _dispatchers(modules):
+            dispatcher._cache.flush()
+        marker.write_text(SOURCE_DIGEST)
+        _FLUSHED.append(True)
+    except OSError:  # an unwritable cache: numba recompiles or falls back by itself
+        pass
+
+
+def is_warm(entry) -> bool:
+    """Whether ``entry`` (a dispatcher) is in numba's on-disk cache; if not, its first call
+    compiles the engine (about 30 s)."""
+    if _FLUSHED:
+        return False
+    try:
+        return Path(entry._cache._cache_file._index_path).exists()
+    except AttributeError:  # another numba's internals: say nothing
+        return True

@@ -1,0 +1,715 @@
+"""The lane table: many points stepped together, LANES at a time per thread.
+
+The plain RK4 step of every lane runs in branch-free loops over groups of GROUP lanes,
+which LLVM compiles to vector code: out of contact the step is linear, and is applied as
+the matrix it is (model.free_step_map); a group with a lane in contact also runs the RK4
+stages with the contact force. The rare steps that need more (a contact switch to locate,
+graded sub-steps next to a touch or a separation, an extremum or a force peak to place,
+the end of a forcing period) are marked and finished lane by lane in scalar code
+(:func:`finish_step`); the steps just after a touch and before a separation, in quarter
+steps, run first, in vector code on the lanes that take them, packed (quarter_steps).
+
+A point's result does not depend on its lane: every lane runs the same vector
+instructions, and which steps run scalar code is decided by the point's own state (see
+flags). Which point a lane holds is the scheduler's business (:mod:`.scheduler`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import hermite, steady
+from .flags import JIT
+from .layouts import (
+    ACC,
+    BLOCK,
+    GROUP,
+    LANE,
+    LANES,
+    METRIC,
+    N_STROBE,
+    N_VALUES,
+    PARAM,
+    STATE,
+    STATUS,
+)
+from .model import (
+    Coefficients,
+    contact_force,
+    derivatives,
+    free_step_map,
+    in_contact,
+    rk4,
+    voltage_rate,
+)
+from .rk4 import GRADED, WHOLE, pieces, switch_step
+from .steady import MAX_ORBIT_PERIOD
+
+# Steps between exact resets of the forcing rotation, whose rounding drifts: at every
+# multiple of SYNC steps, and at each period's start. Over 2048 steps (sin, cos) drift by
+# at most 9e-14 (at 368-65536 steps a period), far below RK4's error where a period has few
+# steps and about the rounding floor where it has many; each reset is a step finished in
+# scalar code, hence not more often.
+SYNC = 2048.0
+
+
+@njit(**JIT)
+def table():
+    """A lane table of zeros, aligned to 64 bytes: no vector load of a row straddles two
+    cache lines (a misaligned table ran the lane loop about 20 % slower)."""
+    block = np.zeros(len(LANE) * LANES + 8)
+    skip = (8 - block.ctypes.data % 64 // 8) % 8
+    return block[skip : skip + len(LANE) * LANES]
+
+
+@njit(**JIT)
+def load(L, j, p, y, it):
+    """Put the point of parameter row ``p`` and state ``y`` into lane ``j``, at t = 0, to
+    take its first step in iteration ``it`` of the lane loop."""
+    n_steps = p[PARAM.steps]
+    h = p[PARAM.period] / n_steps
+    L[LANE.amplitude + j], L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j] = (
+        p[PARAM.amplitude],
+        p[PARAM.wn2],
+        p[PARAM.cm],
+        p[PARAM.thm],
+    )
+    L[LANE.khm + j], L[LANE.kh + j], L[LANE.gap + j] = (
+        p[PARAM.khm],
+        p[PARAM.khm] * p[PARAM.mass],
+        p[PARAM.gap],
+    )
+    L[LANE.latch + j] = p[PARAM.latch]
+    L[LANE.irc + j], L[LANE.thc + j] = p[PARAM.irc], p[PARAM.thc]
+    L[LANE.h + j], L[LANE.half_h + j], L[LANE.h2_6 + j] = h, 0.5 * h, h * h / 6.0
+    ca, sa = math.cos(math.pi / n_steps), math.sin(math.pi / n_steps)
+    L[LANE.cos_half + j], L[LANE.sin_half + j] = ca, sa
+    L[LANE.cos_step + j], L[LANE.sin_step + j] = (
+        math.cos(2 * math.pi / n_steps),
+        math.sin(2 * math.pi / n_steps),
+    )
+    L[LANE.cos_eighth + j], L[LANE.sin_eighth + j] = (
+        math.cos(math.pi / (4 * n_steps)),
+        math.sin(math.pi / (4 * n_steps)),
+    )
+    m = free_step_map(
+        h,
+        ca,
+        sa,
+        p[PARAM.amplitude],
+        p[PARAM.wn2],
+        p[PARAM.cm],
+        p[PARAM.thm],
+        p[PARAM.irc],
+        p[PARAM.thc],
+    )
+    for r, row in enumerate((LANE.mxx, LANE.mvx, LANE.mex)):
+        for c in range(5):
+            L[row + c * LANES + j] = m[r, c]
+    L[LANE.steps + j], L[LANE.locate + j] = n_steps, p[PARAM.locate]
+    x, v, V = y[STATE.x], y[STATE.v], y[STATE.voltage]
+    vimp = y[STATE.approach_velocity]
+    latch = p[PARAM.latch]
+    ch = latch / vimp if latch > 0.0 else p[PARAM.ch]
+    g = p[PARAM.gap]
+    L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j], L[LANE.vimp + j], L[LANE.ch + j] = (
+        x,
+        v,
+        V,
+        vimp,
+        ch,
+    )
+    L[LANE.on + j] = 1.0 if p[PARAM.locate] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
+    L[LANE.fine + j] = 0.0
+    L[LANE.periods + j] = 0.0
+    _start_period(L, j, it)
+
+
+@njit(**JIT)
+def _start_period(L, j, it):
+    """Reset the per-period accumulators of lane ``j`` and the forcing phase to 0, for a
+    period whose first step is taken in iteration ``it`` of the lane loop.
+
+    Every lane takes one step an iteration, so a lane's steps into its period are the
+    iterations since LANE.k0; LANE.k_end is the iteration at whose end the lane stops (a resync
+    of the forcing phase or the period's end): a row to compare with, not a count to
+    update, in the lane loop."""
+    x, v, V = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j]
+    fc = contact_force(x, v, L[LANE.on + j] * L[LANE.kh + j], L[LANE.gap + j], L[LANE.ch + j])
+    L[LANE.q + j] = 0.0
+    L[LANE.x_max + j], L[LANE.x_min + j], L[LANE.v_max + j], L[LANE.v_peak + j] = (
+        x,
+        x,
+        abs(v),
+        abs(V),
+    )
+    L[LANE.fc_previous + j], L[LANE.fc + j], L[LANE.fc_max + j] = fc, fc, fc
+    L[LANE.impacts + j], L[LANE.sum_vimp + j] = 0.0, 0.0
+    L[LANE.sin + j], L[LANE.cos + j] = 0.0, 1.0
+    L[LANE.k0 + j] = it
+    L[LANE.k_end + j] = it + min(SYNC, L[LANE.steps + j]) - 1.0
+
+
+@njit(**JIT)
+def lane_steps(L, groups, it):
+    """One plain RK4 step of the lanes of the first ``groups`` groups, branch-free so that
+    LLVM vectorizes it.
+
+    The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
+    vectors), written out with constant bounds so that it compiles to vector code only.
+    A lane out of contact steps by the RK4 step's linear map (model.free_step_map, 15
+    multiply-adds and 3 adds); a group with a lane in contact also runs the RK4 stages with the
+    contact force, and each lane takes the one that applies to it, so that a point gets
+    the same bits whatever its neighbours. Two groups rather than one block of LANES,
+    because a block is more often in contact; not four groups of one vector, whose
+    contact-free loop LLVM compiled to scalar code once the trial step got short. A
+    second loop commits: lanes whose
+    step needs more (a contact switch, graded sub-steps near a touch or a separation, an
+    extremum to place, a force peak, the end of a period) are marked in LANE.need and left
+    for :func:`finish_step`. Returns the number of lanes with a point marked, and how
+    many of them take quarter steps (see quarter_steps).
+    """
+    touching = _trial_group(L, 0)
+    if groups > 1:  # (else the second group is idle: no lane in contact)
+        touching += _trial_group(L, GROUP)
+    if touching == 0.0:
+        return _commit_steps(L, False, it)
+    return _commit_steps(L, True, it)
+
+
+@njit(inline="always", **JIT)
+def _trial_group(L, j0):
+    """The RK4 stages of group j0 (see lane_steps); returns how many of its lanes touch."""
+    touching = 0.0
+    for j in range(j0, j0 + GROUP):
+        touching += L[LANE.on + j]
+    if touching == 0.0:
+        _trial_steps(L, j0, False)
+    else:
+        _trial_steps(L, j0, True)
+    return touching
+
+
+@njit(inline="always", **JIT)
+def _trial_steps(L, j0, contact):
+    """The trial step of group j0's lanes: the contact-free map (see the rows LANE.mxx...),
+    and with ``contact`` the RK4 stages with the contact force for the lanes in contact,
+    chosen lane by lane (a lane out of contact gets the same bits either way)."""
+    for j in range(j0, j0 + GROUP):
+        x, v, V, s0, c0 = (
+            L[LANE.x + j],
+            L[LANE.v + j],
+            L[LANE.voltage + j],
+            L[LANE.sin + j],
+            L[LANE.cos + j],
+        )
+        xn = x + (
+            L[LANE.mxx + j] * x
+            + L[LANE.mxv + j] * v
+            + L[LANE.mxe + j] * V
+            + L[LANE.mxs + j] * s0
+            + L[LANE.mxc + j] * c0
+        )
+        vn = v + (
+            L[LANE.mvx + j] * x
+            + L[LANE.mvv + j] * v
+            + L[LANE.mve + j] * V
+            + L[LANE.mvs + j] * s0
+            + L[LANE.mvc + j] * c0
+        )
+        Vn = V + (
+            L[LANE.mex + j] * x
+            + L[LANE.mev + j] * v
+            + L[LANE.mee + j] * V
+            + L[LANE.mes + j] * s0
+            + L[LANE.mec + j] * c0
+        )
+        L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = xn, vn, Vn
+    if contact:
+        for j in range(j0, j0 + GROUP):
+            x, v, V, s0, c0 = (
+                L[LANE.x + j],
+                L[LANE.v + j],
+                L[LANE.voltage + j],
+                L[LANE.sin + j],
+                L[LANE.cos + j],
+            )
+            A, ca, sa = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j]
+            sm = s0 * ca + c0 * sa
+            s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+            on = L[LANE.on + j]
+            coef = Coefficients(
+                L[LANE.wn2 + j],
+                L[LANE.cm + j],
+                L[LANE.thm + j],
+                on * L[LANE.khm + j],
+                L[LANE.gap + j],
+                L[LANE.ch + j],
+                L[LANE.irc + j],
+                L[LANE.thc + j],
+            )
+            xc, vc, Vc, _, _ = rk4(x, v, V, L[LANE.h + j], A * s0, A * sm, A * s1, coef)
+            L[LANE.x_contact + j], L[LANE.v_contact + j], L[LANE.voltage_contact + j] = xc, vc, Vc
+        # (chosen in a loop of its own: with the choice in the loop above, LLVM left that
+        # loop scalar)
+        for j in range(j0, j0 + GROUP):
+            free = L[LANE.on + j] == 0.0
+            L[LANE.x_trial + j] = L[LANE.x_trial + j] if free else L[LANE.x_contact + j]
+            L[LANE.v_trial + j] = L[LANE.v_trial + j] if free else L[LANE.v_contact + j]
+            L[LANE.voltage_trial + j] = (
+                L[LANE.voltage_trial + j] if free else L[LANE.voltage_contact + j]
+            )
+
+
+@njit(inline="always", **JIT)
+def _commit_steps(L, contact, it):
+    """Commit the trial step of every lane that needs nothing more (see lane_steps), in
+    iteration ``it``.
+
+    With ``contact=False`` no lane is in contact: every lane locates its switches (plain
+    fixed steps keep the contact on), the force is 0 and stays so, and neither the force
+    peak nor the approach to a separation needs looking at. The step's int V^2 dt comes
+    from its ends (hermite.v2_integral). Returns the number of lanes with a point (not
+    idle) marked LANE.need, and how many of them take quarter steps (_quarter).
+    """
+    marked, quarters = 0, 0
+    for j in range(LANES):
+        x, v, V, ch = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j], L[LANE.ch + j]
+        xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
+        g, cb, sb = L[LANE.gap + j], L[LANE.cos_step + j], L[LANE.sin_step + j]
+        s0, c0 = L[LANE.sin + j], L[LANE.cos + j]
+        irc, thc = L[LANE.irc + j], L[LANE.thc + j]
+        dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
+        dq = hermite.v2_integral(V, dV, Vn, dVn, L[LANE.half_h + j], L[LANE.h2_6 + j])
+        need = (v * vn <= 0.0) | (dV * dVn <= 0.0) | (it >= L[LANE.k_end + j])
+        if contact:
+            on, h = L[LANE.on + j], L[LANE.h + j]
+            fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
+            fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
+            located = L[LANE.locate + j] != 0.0
+            # plain fixed steps with a latched law predict the approach velocity: in scalar
+            predict = (not located) & (L[LANE.latch + j] > 0.0) & (x <= g) & (v > 0.0)
+            switch = located & (in_contact(xn, vn, g, ch) != (on == 1.0))
+            touch = (not located) & (x <= g) & (xn > g)
+            quarter = (
+                located
+                & (on == 1.0)
+                & (  # as _quarter
+                    (L[LANE.fine + j] > 0.0) | ((v < 0.0) & (x - g < -3.0 * h * v))
+                )
+            )
+            need = (
+                need | switch | touch | predict | quarter | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn))
+            )
+            quarters += 1 if quarter else 0
+            L[LANE.fc_previous + j], L[LANE.fc + j] = fcp if need else fc, fc if need else fcn
+        else:  # (the force rows stay as they are: 0, or the last force of a contact,
+            # which the touch step, never a plain one, shifts out)
+            need = need | in_contact(xn, vn, g, ch)
+        # A lane marked LANE.need keeps its state, for finish_step to redo the step from it
+        # (the trial stays in the trial rows); its trial values are kept out of the running
+        # sum without branches. The running maximum of |v| takes the step's start, a
+        # sample either way (the last of a period is taken by finish_step). The extrema
+        # of x, V and F_c need no running value here: with the sign of v, of dV/dt and of
+        # dF_c/dt kept, the samples are monotonic, so the largest lies at either end of a
+        # run of plain steps, where finish_step takes it.
+        off = 1.0 if need else 0.0
+        L[LANE.need + j] = off
+        L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = (
+            x if need else xn,
+            v if need else vn,
+            V if need else Vn,
+        )
+        L[LANE.sin + j] = s0 if need else s0 * cb + c0 * sb
+        L[LANE.cos + j] = c0 if need else c0 * cb - s0 * sb
+        L[LANE.q + j] += (1.0 - off) * dq
+        L[LANE.v_max + j] = max(L[LANE.v_max + j], abs(v))
+        marked += 1 if need else 0
+    return marked, quarters
+
+
+@njit(inline="always", **JIT)
+def _quarter(L, j):
+    """Whether lane ``j``'s step is to be taken in quarter steps: its contact switches
+    located, in contact, and just after a touch (LANE.fine) or about to separate (within 3
+    steps at its velocity). These steps still see the (t - t_0)^1.5 growth of the force."""
+    x, v, h = L[LANE.x + j], L[LANE.v + j], L[LANE.h + j]
+    return (
+        L[LANE.locate + j] != 0.0
+        and L[LANE.on + j] == 1.0
+        and (L[LANE.fine + j] > 0.0 or (v < 0.0 and x - L[LANE.gap + j] < -3.0 * h * v))
+    )
+
+
+@njit(**JIT)
+def quarter_steps(L, lanes):
+    """Redo the trial step of the marked lanes (LANE.need) that take quarter steps (_quarter)
+    in four quarter steps with the contact force, for finish_step to finish.
+
+    They are packed into whole blocks of BLOCK lanes (the last padded with copies of the
+    first), which run in vector code: a point's quarter steps are the same instructions in
+    any lane of a block, and cost a block, not a lane each, when several lanes take them
+    together (the copies of a point in an ensemble, neighbouring gaps in a sweep).
+    """
+    n = 0
+    for j in range(lanes):
+        if L[LANE.need + j] == 0.0 or not _quarter(L, j):
+            continue
+        L[LANE.q_lane + n] = j
+        L[LANE.q_x + n], L[LANE.q_v + n], L[LANE.q_voltage + n] = (
+            L[LANE.x + j],
+            L[LANE.v + j],
+            L[LANE.voltage + j],
+        )
+        L[LANE.q_sin + n], L[LANE.q_cos + n], L[LANE.q_amplitude + n] = (
+            L[LANE.sin + j],
+            L[LANE.cos + j],
+            L[LANE.amplitude + j],
+        )
+        L[LANE.q_cos_eighth + n], L[LANE.q_sin_eighth + n], L[LANE.q_dt + n] = (
+            L[LANE.cos_eighth + j],
+            L[LANE.sin_eighth + j],
+            0.25 * L[LANE.h + j],
+        )
+        L[LANE.q_wn2 + n], L[LANE.q_cm + n], L[LANE.q_thm + n] = (
+            L[LANE.wn2 + j],
+            L[LANE.cm + j],
+            L[LANE.thm + j],
+        )
+        L[LANE.q_khm + n], L[LANE.q_gap + n], L[LANE.q_ch + n] = (
+            L[LANE.khm + j],
+            L[LANE.gap + j],
+            L[LANE.ch + j],
+        )
+        L[LANE.q_irc + n], L[LANE.q_thc + n] = L[LANE.irc + j], L[LANE.thc + j]
+        n += 1
+    if n == 0:
+        return
+    blocks = (n + BLOCK - 1) // BLOCK
+    for k in range(n, blocks * BLOCK):
+        for r in range(LANE.q_lane, LANE.q_thc + LANES, LANES):
+            L[r + k] = L[r]
+    # (each block's offset written out: LLVM vectorizes the loop of a block whose offset
+    # it knows)
+    _quarter_block(L, 0)
+    if blocks > 1:
+        _quarter_block(L, BLOCK)
+    if blocks > 2:
+        _quarter_block(L, 2 * BLOCK)
+    if blocks > 3:
+        _quarter_block(L, 3 * BLOCK)
+    for k in range(n):
+        j = int(L[LANE.q_lane + k])
+        L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = (
+            L[LANE.q_x + k],
+            L[LANE.q_v + k],
+            L[LANE.q_voltage + k],
+        )
+
+
+@njit(inline="always", **JIT)
+def _quarter_block(L, b):
+    """Four quarter steps of the packed lanes b, ..., b + BLOCK - 1 (see quarter_steps),
+    with the forcing every eighth of a step by rotating the phase; written out, as LLVM
+    vectorizes only a loop without an inner loop."""
+    for k in range(b, b + BLOCK):
+        x, v, V, s0, c0 = (
+            L[LANE.q_x + k],
+            L[LANE.q_v + k],
+            L[LANE.q_voltage + k],
+            L[LANE.q_sin + k],
+            L[LANE.q_cos + k],
+        )
+        A, ce, se, dt = (
+            L[LANE.q_amplitude + k],
+            L[LANE.q_cos_eighth + k],
+            L[LANE.q_sin_eighth + k],
+            L[LANE.q_dt + k],
+        )
+        wn2, cm, thm, khm = (
+            L[LANE.q_wn2 + k],
+            L[LANE.q_cm + k],
+            L[LANE.q_thm + k],
+            L[LANE.q_khm + k],
+        )
+        g, ch, irc, thc = L[LANE.q_gap + k], L[LANE.q_ch + k], L[LANE.q_irc + k], L[LANE.q_thc + k]
+        s1, c1 = s0 * ce + c0 * se, c0 * ce - s0 * se
+        s2, c2 = s1 * ce + c1 * se, c1 * ce - s1 * se
+        s3, c3 = s2 * ce + c2 * se, c2 * ce - s2 * se
+        s4, c4 = s3 * ce + c3 * se, c3 * ce - s3 * se
+        s5, c5 = s4 * ce + c4 * se, c4 * ce - s4 * se
+        s6, c6 = s5 * ce + c5 * se, c5 * ce - s5 * se
+        s7, c7 = s6 * ce + c6 * se, c6 * ce - s6 * se
+        s8 = s7 * ce + c7 * se
+        coef = Coefficients(wn2, cm, thm, khm, g, ch, irc, thc)
+        x, v, V, _, _ = rk4(x, v, V, dt, A * s0, A * s1, A * s2, coef)
+        x, v, V, _, _ = rk4(x, v, V, dt, A * s2, A * s3, A * s4, coef)
+        x, v, V, _, _ = rk4(x, v, V, dt, A * s4, A * s5, A * s6, coef)
+        x, v, V, _, _ = rk4(x, v, V, dt, A * s6, A * s7, A * s8, coef)
+        L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k] = x, v, V
+
+
+@njit(**JIT)
+def finish_step(L, j, it):
+    """Redo and finish the step of lane ``j`` that the lane loop marked (see lane_steps)
+    in iteration ``it``; whether it ends the lane's forcing period."""
+    x, v, V, on, ch = (
+        L[LANE.x + j],
+        L[LANE.v + j],
+        L[LANE.voltage + j],
+        L[LANE.on + j],
+        L[LANE.ch + j],
+    )
+    xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
+    A, wn2, cm, thm, khm = (
+        L[LANE.amplitude + j],
+        L[LANE.wn2 + j],
+        L[LANE.cm + j],
+        L[LANE.thm + j],
+        L[LANE.khm + j],
+    )
+    g, irc, thc, h, latch = (
+        L[LANE.gap + j],
+        L[LANE.irc + j],
+        L[LANE.thc + j],
+        L[LANE.h + j],
+        L[LANE.latch + j],
+    )
+    n_steps = L[LANE.steps + j]
+    s0, c0 = L[LANE.sin + j], L[LANE.cos + j]  # the forcing phase at the start of the step
+    fine = L[LANE.fine + j]
+    dV = voltage_rate(V, v, irc, thc)  # at the start of the step [V/s]
+    # int V^2 dt over the trial step as the lane loop takes it (see _commit_steps), unless
+    # the step is redone below
+    dq = hermite.v2_integral(
+        V, dV, Vn, voltage_rate(Vn, vn, irc, thc), L[LANE.half_h + j], L[LANE.h2_6 + j]
+    )
+    if L[LANE.locate + j] == 0.0:
+        if latch > 0.0 and x <= g and v > 0.0:  # predicted approach velocity: redo the step
+            ch = latch / v
+            ca, sa = L[LANE.cos_half + j], L[LANE.sin_half + j]
+            sm = s0 * ca + c0 * sa
+            s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+            xn, vn, Vn, dq, _ = rk4(
+                x, v, V, h, A * s0, A * sm, A * s1, Coefficients(wn2, cm, thm, khm, g, ch, irc, thc)
+            )
+        if x <= g < xn:  # first touch, on the cubic Hermite interpolant
+            v_on = hermite.crossing_rate(x, v, xn, vn, h, g)
+            L[LANE.impacts + j] += 1.0
+            L[LANE.sum_vimp + j] += v_on
+            if latch > 0.0 and v_on > 0.0:
+                L[LANE.vimp + j] = v_on
+                ch = latch / v_on
+    elif in_contact(xn, vn, g, ch) != (on == 1.0):
+        before = Coefficients(wn2, cm, thm, on * khm, g, ch, irc, thc)  # the old contact state
+        a0, _ = derivatives(x, v, V, A * s0, before)
+        kind, theta, done, xe, ve, Ve, q1 = switch_step(
+            x, v, V, a0, xn, vn, Vn, s0, c0, n_steps, h, A, before
+        )
+        # Up to the switch with the old contact state (graded towards a separation; else
+        # one sub-step, Newton's last when it converged)...
+        graded = on == 1.0 and kind == 1
+        if graded or not done:
+            xe, ve, Ve, q1 = pieces(
+                x,
+                v,
+                V,
+                0.0,
+                theta,
+                GRADED if graded else WHOLE,
+                True,
+                s0,
+                c0,
+                n_steps,
+                h,
+                A,
+                before,
+            )
+        onset = on == 0.0 and kind == 1
+        if onset:
+            L[LANE.impacts + j] += 1.0
+            L[LANE.sum_vimp + j] += ve
+            if latch > 0.0 and ve > 0.0:
+                L[LANE.vimp + j] = ve
+                ch = latch / ve
+        on = 1.0 - on
+        # ... and after it with the new one (graded from a touch).
+        after = Coefficients(wn2, cm, thm, on * khm, g, ch, irc, thc)
+        xn, vn, Vn, q2 = pieces(
+            xe,
+            ve,
+            Ve,
+            theta,
+            1.0 - theta,
+            GRADED if onset else WHOLE,
+            False,
+            s0,
+            c0,
+            n_steps,
+            h,
+            A,
+            after,
+        )
+        dq = q1 + q2
+        fine = 3.0 if onset else 0.0
+    elif _quarter(L, j):  # the trial step was taken in quarter steps (quarter_steps)
+        fine = max(fine - 1.0, 0.0)
+    dVn = voltage_rate(Vn, vn, irc, thc)
+    if v > 0.0 >= vn or v < 0.0 <= vn:
+        xe = hermite.extremum(x, v, xn, vn, h)
+        L[LANE.x_max + j], L[LANE.x_min + j] = (
+            max(L[LANE.x_max + j], xe),
+            min(L[LANE.x_min + j], xe),
+        )
+    if (dV > 0.0) != (dVn > 0.0):
+        L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(hermite.extremum(V, dV, Vn, dVn, h)))
+    fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
+    fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
+    if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
+        a = 0.5 * (fcp + fcn) - fc
+        b = 0.5 * (fcn - fcp)
+        L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc - b * b / (4.0 * a))
+    L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
+    L[LANE.fc_previous + j], L[LANE.fc + j] = fc, fcn
+    L[LANE.on + j], L[LANE.ch + j], L[LANE.fine + j] = on, ch, fine
+    L[LANE.q + j] += dq
+    # both ends of the step: the ends of the runs of plain steps (see _commit_steps)
+    L[LANE.x_max + j], L[LANE.x_min + j] = (
+        max(L[LANE.x_max + j], x, xn),
+        min(L[LANE.x_min + j], x, xn),
+    )
+    L[LANE.v_max + j], L[LANE.v_peak + j] = (
+        max(L[LANE.v_max + j], abs(vn)),
+        max(L[LANE.v_peak + j], abs(V), abs(Vn)),
+    )
+    L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
+    k0 = L[LANE.k0 + j]
+    k = it + 1.0 - k0  # steps into the period after this one
+    # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
+    # every SYNC steps (the rotation's rounding drifts); at k = n_steps the period ends
+    # and _start_period sets it to 0.
+    sync = SYNC * math.floor(k / SYNC)
+    if k == sync and k < n_steps:
+        phase = 2.0 * math.pi * k / n_steps
+        L[LANE.sin + j], L[LANE.cos + j] = math.sin(phase), math.cos(phase)
+    else:
+        cb, sb = L[LANE.cos_step + j], L[LANE.sin_step + j]
+        L[LANE.sin + j], L[LANE.cos + j] = s0 * cb + c0 * sb, c0 * cb - s0 * sb
+    # the next step to stop at: a resync or the end (a lane in quarter steps is marked as
+    # such by _commit_steps)
+    L[LANE.k_end + j] = k0 + min(sync + SYNC, n_steps) - 1.0
+    return k >= n_steps
+
+
+@njit(**JIT)
+def end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
+    """Book the period that lane ``j`` just finished in iteration ``it``; the status once
+    it is done, else -1."""
+    x, v, V, q = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j], L[LANE.q + j]
+    n = int(L[LANE.periods + j]) + 1
+    L[LANE.periods + j] = n
+    if not (math.isfinite(x + v + V + q) and abs(x) <= p[PARAM.x_limit]):
+        return STATUS.diverged, 0
+    slot = (n - 1) % MAX_ORBIT_PERIOD
+    acc[slot, ACC.q], acc[slot, ACC.x_max], acc[slot, ACC.x_min] = (
+        q,
+        L[LANE.x_max + j],
+        L[LANE.x_min + j],
+    )
+    acc[slot, ACC.v_max], acc[slot, ACC.v_peak] = L[LANE.v_max + j], L[LANE.v_peak + j]
+    acc[slot, ACC.fc_max], acc[slot, ACC.impacts], acc[slot, ACC.sum_vimp] = (
+        L[LANE.fc_max + j],
+        L[LANE.impacts + j],
+        L[LANE.sum_vimp + j],
+    )
+    r = n % ring_len
+    ring[r, STATE.x], ring[r, STATE.v], ring[r, STATE.voltage] = x, v, V
+    _start_period(L, j, it + 1.0)
+    if settle:
+        orbit = steady.orbit_period(
+            ring,
+            acc,
+            gaps,
+            n,
+            ring_len,
+            p[PARAM.tolerance],
+            p[PARAM.v_per_x],
+            p[PARAM.voltage_per_x],
+        )
+        if orbit > 0 and n >= n_strobe:
+            return STATUS.settled, orbit
+    if n >= int(p[PARAM.max_periods]):
+        return STATUS.not_settled, 0
+    return -1, 0
+
+
+@njit(**JIT)
+def output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
+    """Write the state, stroboscopic samples and metrics of lane ``j``'s finished point."""
+    n = int(L[LANE.periods + j])
+    y[STATE.x], y[STATE.v], y[STATE.voltage] = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j]
+    y[STATE.approach_velocity] = L[LANE.vimp + j]
+    n_strobe = strobe.shape[0]
+    for i in range(n_strobe):
+        age = n_strobe - 1 - i
+        valid = age <= n and status != STATUS.diverged
+        for c in range(N_STROBE):
+            strobe[i, c] = ring[(n - age) % ring_len, c] if valid else np.nan
+    steady.reduce(
+        acc, n, orbit if status == STATUS.settled else min(n, MAX_ORBIT_PERIOD), p, metrics
+    )
+    metrics[METRIC.orbit_period] = orbit
+    metrics[METRIC.status] = status
+    metrics[METRIC.periods_run] = n
+    if status == STATUS.diverged:
+        metrics[:N_VALUES] = np.nan
+
+
+@njit(**JIT)
+def refuse(metrics, strobe):
+    """Write the outputs of a point refused before integration (too stiff): no values."""
+    metrics[:N_VALUES] = np.nan
+    metrics[METRIC.status] = STATUS.too_stiff
+    metrics[METRIC.orbit_period] = 0.0
+    metrics[METRIC.periods_run] = 0.0
+    strobe[:, :] = np.nan
+
+
+@njit(**JIT)
+def move(L, j, i, ring, acc, gaps):
+    """Move the point of lane ``j`` to lane ``i`` and leave lane ``j`` idle."""
+    for r in range(0, len(LANE) * LANES, LANES):
+        L[r + i] = L[r + j]
+    ring[i], acc[i], gaps[i] = ring[j], acc[j], gaps[j]
+    idle(L, j)
+
+
+@njit(**JIT)
+def idle(L, j):
+    """Lane ``j`` without a point, which the lane loop never marks: it stays at x = 0,
+    v = 1, V = 1 (its increments are 0), with dV/dt = 1 (1/(R C_p) = -1, theta/C_p =
+    0), no forcing, the stop at infinity, no contact and no period end."""
+    (
+        L[LANE.amplitude + j],
+        L[LANE.khm + j],
+        L[LANE.steps + j],
+        L[LANE.locate + j],
+        L[LANE.on + j],
+    ) = 0.0, 0.0, np.inf, 1.0, 0.0
+    L[LANE.gap + j], L[LANE.irc + j], L[LANE.thc + j], L[LANE.k_end + j] = np.inf, -1.0, 0.0, np.inf
+    L[LANE.fc + j], L[LANE.fc_previous + j] = 0.0, 0.0
+    L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = 0.0, 1.0, 1.0
+    for r in range(LANE.mxx, LANE.mec + LANES, LANES):
+        L[r + j] = 0.0
+
+
+@njit(**JIT)
+def take(L, j, params, states, pt, ring, acc, gaps, it):
+    load(L, j, params[pt], states[pt], it)
+    ring[j, 0, STATE.x], ring[j, 0, STATE.v] = L[LANE.x + j], L[LANE.v + j]
+    ring[j, 0, STATE.voltage] = L[LANE.voltage + j]
+    acc[j, :, :] = 0.0
+    gaps[j, :, :] = np.inf

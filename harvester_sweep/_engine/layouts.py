@@ -1,0 +1,176 @@
+"""Every row layout of the engine, declared once from named fields.
+
+A layout is a named tuple of offsets: ``PARAM.gap`` is the gap's index in a point's
+parameter row, ``LANE.x + j`` the displacement of lane ``j`` in the lane table. numba
+reads a global named tuple as a constant, so that each offset is a constant in the
+compiled code (what lets LLVM see that the lane loop's loads and stores never overlap,
+and vectorize it). Sizes are ``len(LAYOUT)``, never written out.
+
+Pure Python, no imports from the package: the layers above read the same layouts.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+
+def _layout(name: str, fields: tuple, stride: int = 1):
+    """A named tuple of the offsets ``i * stride`` of ``fields`` ((name, meaning) pairs)."""
+    names = tuple(field for field, _ in fields)
+    cls = namedtuple(name, names)
+    cls.__doc__ = "Offsets of " + name + ":\n" + "\n".join(
+        f"- {field}: {meaning}" for field, meaning in fields)
+    return cls(*range(0, len(names) * stride, stride))
+
+
+#: A point's state; also the columns of a stroboscopic sample (the first three).
+STATE = _layout("State", (
+    ("x", "tip displacement relative to the base [m]"),
+    ("v", "tip velocity [m/s]"),
+    ("voltage", "voltage across the load [V]"),
+    ("approach_velocity", "approach velocity latched at the last first touch [m/s]"),
+))
+#: Columns of a stroboscopic sample y(nT): the state without the latched velocity.
+N_STROBE = STATE.approach_velocity
+
+#: A point's parameter row, as the engine reads it (made by harvester_sweep.packing).
+PARAM = _layout("ParameterRow", (
+    ("amplitude", "base acceleration amplitude A [m/s^2]"),
+    ("wn2", "k/m = wn^2 [1/s^2]"),
+    ("cm", "c/m = 2 zeta wn [1/s]"),
+    ("thm", "theta/m [N/(V kg)]"),
+    ("khm", "k_h/m [N/(m^1.5 kg)]"),
+    ("mass", "mass m [kg]"),
+    ("gap", "gap g [m]"),
+    ("ch", "contact damping c_h in fixed mode [s/m]"),
+    ("latch", "factor c_h v_imp of the latched law, 0 in fixed mode [-]"),
+    ("irc", "1/(R C_p) [1/s]"),
+    ("thc", "theta/C_p [V s/m]"),
+    ("resistance", "load resistance R [Ohm]"),
+    ("period", "forcing period T [s]"),
+    ("steps", "steps per period [-]"),
+    ("max_periods", "budget of periods; 0: refused before integration (too stiff) [-]"),
+    ("tolerance", "settle tolerance [-]"),
+    ("x_limit", "|x| beyond this is divergence [m]"),
+    ("locate", "1: locate contact switches inside the step, 0: plain fixed steps [-]"),
+    ("v_per_x", "velocity scale per displacement, w [1/s] (settle test)"),
+    ("voltage_per_x", "voltage scale per displacement, theta/C_p min(1, w R C_p) [V/m]"),
+))
+
+#: A point's metrics, in the engine's order; the names are the public ones
+#: (harvester_sweep.outputs describes each).
+METRIC = _layout("MetricRow", (
+    ("power", "mean V^2/R over the orbit [W]"),
+    ("v_rms", "RMS voltage [V]"),
+    ("v_peak", "peak |V| [V]"),
+    ("power_peak", "v_peak^2/R [W]"),
+    ("x_max", "largest displacement [m]"),
+    ("x_min", "smallest displacement [m]"),
+    ("contact_force_max", "peak contact force [N]"),
+    ("impacts_per_period", "first touches per forcing period [-]"),
+    ("approach_velocity", "mean velocity at first touch [m/s]"),
+    ("orbit_period", "forcing periods per orbit, 0 when not settled [-]"),
+    ("status", "outcome, a code of STATUS [-]"),
+    ("periods_run", "forcing periods integrated [-]"),
+))
+#: The metrics that are NaN for a point without a trustworthy orbit (diverged, refused).
+N_VALUES = METRIC.orbit_period
+
+#: Outcome codes of a point (metric ``status``).
+STATUS = namedtuple("Status", ("settled", "not_settled", "diverged", "too_stiff"))(0, 1, 2, 3)
+
+#: A recorded series: one row per step boundary.
+SERIES = _layout("SeriesRow", (
+    ("x", "tip displacement [m]"),
+    ("v", "tip velocity [m/s]"),
+    ("voltage", "voltage across the load [V]"),
+    ("contact_force", "contact force of the stop [N]"),
+))
+
+#: Per-period accumulators, kept for the last MAX_ORBIT_PERIOD periods.
+ACC = _layout("Accumulators", (
+    ("q", "int V^2 dt over the period [V^2 s]"),
+    ("x_max", "largest x [m]"),
+    ("x_min", "smallest x [m]"),
+    ("v_max", "largest |v| [m/s]"),
+    ("v_peak", "largest |V| [V]"),
+    ("fc_max", "largest contact force [N]"),
+    ("impacts", "first touches [-]"),
+    ("sum_vimp", "sum of the approach velocities at first touch [m/s]"),
+))
+
+#: Points stepped together by one thread, and lanes that take the contact-free code together
+#: (lanes._lane_steps writes out 2 groups).
+LANES = 16
+GROUP = 8
+assert LANES == 2 * GROUP
+#: Lanes of one vector: quarter steps run on whole blocks of packed lanes.
+BLOCK = 4
+
+#: The lane table: one flat array of rows of LANES values, one row per field.
+LANE = _layout("LaneTable", (
+    # the state of each lane's point...
+    ("x", "displacement [m]"),
+    ("v", "velocity [m/s]"),
+    ("voltage", "voltage [V]"),
+    ("vimp", "latched approach velocity [m/s]"),
+    ("ch", "contact damping in use [s/m]"),
+    ("on", "1 in contact, 0 not"),
+    ("fine", "quarter steps left after a touch"),
+    ("q", "int V^2 dt over the period so far [V^2 s]"),
+    ("x_max", "largest x over the period [m]"),
+    ("x_min", "smallest x over the period [m]"),
+    ("v_max", "largest |v| over the period [m/s]"),
+    ("v_peak", "largest |V| over the period [V]"),
+    ("fc_previous", "contact force a step before fc [N]"),
+    ("fc", "contact force at the step's start [N]"),
+    ("fc_max", "largest contact force over the period [N]"),
+    ("impacts", "first touches over the period"),
+    ("sum_vimp", "sum of approach velocities over the period [m/s]"),
+    ("k0", "lane-loop iteration of the period's first step"),
+    ("k_end", "iteration at whose end the lane stops (resync or period end)"),
+    ("periods", "periods finished"),
+    ("sin", "sin of the forcing phase at the step's start"),
+    ("cos", "cos of the forcing phase at the step's start"),
+    # ... the trial step of the lane loop and whether a lane needs scalar work ...
+    ("x_trial", "x after the trial step [m]"),
+    ("v_trial", "v after the trial step [m/s]"),
+    ("voltage_trial", "V after the trial step [V]"),
+    ("need", "1: the step is finished in scalar code"),
+    ("x_contact", "x after the trial step with the contact force [m]"),
+    ("v_contact", "v after the trial step with the contact force [m/s]"),
+    ("voltage_contact", "V after the trial step with the contact force [V]"),
+    # ... the parameters the lane loop reads ...
+    ("amplitude", "A [m/s^2]"),
+    ("wn2", "wn^2 [1/s^2]"),
+    ("cm", "c/m [1/s]"),
+    ("thm", "theta/m"),
+    ("khm", "k_h/m"),
+    ("kh", "k_h [N/m^1.5]"),
+    ("gap", "g [m]"),
+    ("latch", "c_h v_imp of the latched law, 0 in fixed mode"),
+    ("irc", "1/(R C_p) [1/s]"),
+    ("thc", "theta/C_p"),
+    ("h", "step [s]"),
+    ("half_h", "h/2 [s]"),
+    ("h2_6", "h^2/6 [s^2]"),
+    ("cos_half", "cos of half a step's phase"),
+    ("sin_half", "sin of half a step's phase"),
+    ("cos_step", "cos of a step's phase"),
+    ("sin_step", "sin of a step's phase"),
+    ("cos_eighth", "cos of an eighth of a step's phase"),
+    ("sin_eighth", "sin of an eighth of a step's phase"),
+    ("steps", "steps per period"),
+    ("locate", "1: contact switches located"),
+    # ... the contact-free step as the linear map it is (model.free_step_map): the
+    # increments of x, v, V (rows) from (x, v, V, sin, cos) at its start (columns) ...
+    ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),
+    ("mvx", ""), ("mvv", ""), ("mve", ""), ("mvs", ""), ("mvc", ""),
+    ("mex", ""), ("mev", ""), ("mee", ""), ("mes", ""), ("mec", ""),
+    # ... and the lanes that take quarter steps, packed (lanes._quarter_steps): their
+    # lane, state, forcing phase and parameters.
+    ("q_lane", ""), ("q_x", ""), ("q_v", ""), ("q_voltage", ""), ("q_sin", ""), ("q_cos", ""),
+    ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_dt", ""),
+    ("q_wn2", ""), ("q_cm", ""), ("q_thm", ""), ("q_khm", ""), ("q_gap", ""), ("q_ch", ""),
+    ("q_irc", ""), ("q_thc", ""),
+), stride=LANES)

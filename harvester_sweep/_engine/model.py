@@ -1,0 +1,127 @@
+"""The model, declared once: its state, right-hand side, contact and contact-free step.
+
+State ``(x, v, V)`` (layouts.STATE; the latched approach velocity rides along): tip
+displacement relative to the base [m], velocity [m/s], voltage across the load [V]::
+
+    x'' = A sin(w t) - wn^2 x - (c/m) x' + (theta/m) V - F_c / m
+    V'  = -V / (R C_p) - (theta / C_p) x'
+    F_c = k_h delta^1.5 max(1 + c_h x', 0),   delta = max(x - g, 0)
+
+The contact has two surfaces, where its force switches on or off: ``x = g`` (touch and
+separation) and ``1 + c_h x' = 0`` (the no-tension clip: the stop pushes, never pulls).
+Between them the force is smooth, so the RK4 steps in :mod:`.rk4` keep their order once
+every switch is located inside its step. Out of contact the system is linear, and so is
+its RK4 step (:func:`free_step_map`).
+
+A point's coefficients travel as one :data:`Coefficients` tuple (``k``), in the units of
+layouts.PARAM; ``khm`` is 0 for a point out of contact.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from .flags import JIT
+
+#: A point's model coefficients: wn^2 [1/s^2], c/m [1/s], theta/m [N/(V kg)],
+#: k_h/m [N/(m^1.5 kg)] (0: no contact force), g [m], c_h [s/m], 1/(R C_p) [1/s],
+#: theta/C_p [V s/m].
+Coefficients = namedtuple("Coefficients", ("wn2", "cm", "thm", "khm", "g", "ch", "irc", "thc"))
+
+
+@njit(inline="always", **JIT)
+def derivatives(x, v, V, f, k, contact=True):
+    """Acceleration [m/s^2] and dV/dt [V/s] at forcing acceleration ``f`` [m/s^2].
+
+    ``contact=False`` (a constant at the call) leaves the contact term out of the code: the
+    same bits as khm = 0, without its square root. The square root comes last, times a
+    factor computed while it runs: from one RK4 stage to the next the chain of dependent
+    operations (x, x - g, the root, one multiply-add) is then as short as it can be, which
+    is what a lone step in contact waits on.
+    """
+    a = f - k.wn2 * x + k.thm * V - k.cm * v
+    if contact:
+        d = max(x - k.g, 0.0)
+        a = a - k.khm * d * max(1.0 + k.ch * v, 0.0) * math.sqrt(d)
+    return a, -k.irc * V - k.thc * v
+
+
+@njit(inline="always", **JIT)
+def voltage_rate(V, v, irc, thc):
+    """dV/dt [V/s] from the voltage [V] and velocity [m/s]: the load circuit's equation."""
+    return -irc * V - thc * v
+
+
+@njit(inline="always", **JIT)
+def in_contact(x, v, g, ch):
+    """Whether the stop pushes at (x [m], v [m/s]): past both contact surfaces."""
+    return (x > g) & (1.0 + ch * v > 0.0)
+
+
+@njit(inline="always", **JIT)
+def contact_force(x, v, kh_on, g, ch):
+    """Contact force F_c [N] at (x [m], v [m/s]); ``kh_on`` is k_h [N/m^1.5] in contact,
+    0 out of it."""
+    d = max(x - g, 0.0)
+    return kh_on * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
+
+
+@njit(inline="always", **JIT)
+def rk4_increment(x, v, V, dt, f0, fm, f1, k, contact=True):
+    """The increments of x, v, V over one classical RK4 step of length dt [s], the
+    integral of V^2 over the step by the stages' quadrature [V^2 s] and the acceleration
+    at the start [m/s^2]. f0, fm, f1: the forcing accelerations A sin(w t) at the start,
+    middle and end of the step [m/s^2]."""
+    hh, h6 = 0.5 * dt, dt / 6.0
+    a1, e1 = derivatives(x, v, V, f0, k, contact)
+    x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
+    a2, e2 = derivatives(x2, v2, V2, fm, k, contact)
+    x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
+    a3, e3 = derivatives(x3, v3, V3, fm, k, contact)
+    x4, v4, V4 = x + dt * v3, v + dt * a3, V + dt * e3
+    a4, e4 = derivatives(x4, v4, V4, f1, k, contact)
+    return (
+        h6 * (v + 2.0 * (v2 + v3) + v4),
+        h6 * (a1 + 2.0 * (a2 + a3) + a4),
+        h6 * (e1 + 2.0 * (e2 + e3) + e4),
+        h6 * (V * V + 2.0 * (V2 * V2 + V3 * V3) + V4 * V4),
+        a1,
+    )
+
+
+@njit(inline="always", **JIT)
+def rk4(x, v, V, dt, f0, fm, f1, k, contact=True):
+    """One classical RK4 step of length dt [s] (see :func:`rk4_increment`); k.khm = 0
+    switches the contact off, and so does ``contact=False``. Returns x, v, V at the end,
+    the integral of V^2 over the step [V^2 s] and the acceleration at the start [m/s^2]."""
+    dx, dv, dV, dq, a1 = rk4_increment(x, v, V, dt, f0, fm, f1, k, contact)
+    return x + dx, v + dv, V + dV, dq, a1
+
+
+@njit(**JIT)
+def free_step_map(h, ca, sa, A, wn2, cm, thm, irc, thc):
+    """The RK4 step of length h [s] without contact, as the linear map it is.
+
+    Without the contact force the system is linear, so the increment of one RK4 step is
+    linear in z = (x, v, V, sin phi_0, cos phi_0), phi_0 the forcing phase at the step's
+    start (the forcing at the middle and the end of the step comes from phi_0 by rotating
+    it by half a step: ca, sa = cos, sin of pi / steps per period, as in the lane loop).
+    Returns the 3 x 5 matrix D that gives the increments of x, v, V from z, found by
+    stepping the basis vectors of z: (x, v, V) + D z is the same step as :func:`rk4`, up
+    to rounding, for about a third of its floating-point operations. (The increment, not the
+    whole step I + D, is stored: I + D rounded once would repeat the same relative error
+    of ~1e-16 at every step, a drift that grows with the number of steps.)
+    """
+    out = np.empty((3, 5))
+    basis = np.eye(5)
+    k = Coefficients(wn2, cm, thm, 0.0, 0.0, 0.0, irc, thc)
+    for i in range(5):
+        x, v, V, s0, c0 = basis[i, 0], basis[i, 1], basis[i, 2], basis[i, 3], basis[i, 4]
+        sm, cmid = s0 * ca + c0 * sa, c0 * ca - s0 * sa
+        out[0, i], out[1, i], out[2, i], _, _ = rk4_increment(
+            x, v, V, h, A * s0, A * sm, A * (sm * ca + cmid * sa), k, False)
+    return out

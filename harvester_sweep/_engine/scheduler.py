@@ -1,0 +1,284 @@
+"""Which point each lane steps: lines of points, one shared queue, threads and progress.
+
+A *line* is a run of points each of which starts from the final state of the one before
+(the frequencies of a continuation); a point run from rest is a line of one. Each thread
+steps LANES points at once (:mod:`.lanes`); a lane whose point is done takes the next
+point of its line, or else the first point of the next line of a queue every thread
+takes from (an atomic counter), so that slow points do not hold a group back, no lane
+waits for other lines and the threads end together. Once the queue is empty the points
+left move to the first lanes and an empty group is skipped.
+
+A point's result does not depend on its lane, its thread or the thread count
+(tests/engine/test_reproducibility.py).
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numba
+import numpy as np
+from numba import njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from . import lanes
+from .flags import JIT
+from .layouts import ACC, GROUP, LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
+from .steady import GAP_HISTORY, MAX_ORBIT_PERIOD
+
+
+@njit(**JIT)
+def _run_queue(params, states, metrics, strobes, series, settle, queue, successors, control, b):
+    """Run lines that start at the points ``queue`` (indices) to their ends, LANES at a
+    time, as thread ``b``: a lane whose point is done takes the point ``successors`` names
+    next on its line (-1: none), from the state it left, or else the next line not yet
+    taken from the queue (by any thread), so that no lane waits for the slowest point.
+    ``control[b]`` counts the points done; ``control[-1]`` set to nonzero stops taking
+    points (see _next_point)."""
+    n_lanes = min(LANES, len(queue))
+    n_strobe = strobes.shape[1]
+    ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
+    L = lanes.table()
+    ring = np.empty((n_lanes, ring_len, N_STROBE))
+    acc = np.zeros((n_lanes, MAX_ORBIT_PERIOD, len(ACC)))
+    gaps = np.empty((n_lanes, GAP_HISTORY, MAX_ORBIT_PERIOD + 1))
+    point = np.full(n_lanes, -1)
+    n_series = series.shape[0]
+    for j in range(LANES):
+        lanes.idle(L, j)
+    active = 0
+    for j in range(n_lanes):  # the lanes that get no point are the last ones
+        pt = _next_point(params, states, metrics, strobes, successors, queue, -1, False,
+                         control, b)
+        if pt < 0:
+            break
+        lanes.take(L, j, params, states, pt, ring, acc, gaps, 0.0)
+        point[j] = pt
+        active += 1
+    groups = (active + GROUP - 1) // GROUP
+    it = -1.0  # the iteration of the lane loop
+    while active > 0:
+        it += 1.0
+        if n_series > 0:  # one point recorded at every step boundary
+            _record(series, L, int(L[LANE.periods] * L[LANE.steps] + it - L[LANE.k0]))
+        marked, quarters = lanes.lane_steps(L, groups, it)
+        if marked == 0:
+            continue
+        if quarters > 0:
+            lanes.quarter_steps(L, n_lanes)
+        finished = False
+        for j in range(n_lanes):
+            if L[LANE.need + j] == 0.0 or point[j] < 0:
+                continue
+            if not lanes.finish_step(L, j, it):
+                continue
+            pt = point[j]
+            status, orbit = lanes.end_period(L, j, params[pt], ring[j], acc[j], gaps[j],
+                                             ring_len, n_strobe, settle, it)
+            if status < 0:
+                continue
+            if n_series > 0:
+                _record(series, L, int(L[LANE.periods] * L[LANE.steps]))
+            lanes.output(L, j, params[pt], states[pt], metrics[pt], strobes[pt], ring[j], acc[j],
+                         ring_len, status, orbit)
+            control[b] += 1
+            pt = _next_point(params, states, metrics, strobes, successors, queue, pt,
+                             status == STATUS.diverged, control, b)
+            if pt >= 0:
+                lanes.take(L, j, params, states, pt, ring, acc, gaps, it + 1.0)
+                point[j] = pt
+            else:
+                point[j] = -1
+                lanes.idle(L, j)
+                active -= 1
+                finished = True
+        if finished:  # the queue is empty: move the points left to the first lanes
+            active = 0
+            for j in range(n_lanes):
+                if point[j] >= 0:
+                    if j != active:
+                        lanes.move(L, j, active, ring, acc, gaps)
+                        point[active], point[j] = point[j], -1
+                    active += 1
+            groups = (active + GROUP - 1) // GROUP
+
+
+@njit(**JIT)
+def _next_point(params, states, metrics, strobes, successors, queue, done, diverged, control,
+                b):
+    """The next point to run after point ``done`` (-1: none yet): ``done``'s successor,
+    which starts from ``done``'s final state (from its own initial state, the state at
+    rest, when ``done`` ``diverged``), or else the next line of ``queue``, which every
+    thread takes from (``control[-2]``, the next to take, is shared); -1 when none is left
+    or ``control[-1]`` asks to stop.
+
+    A point whose budget of periods (PARAM.max_periods) is 0 was refused before
+    integration (too stiff): it is not run, its outputs say so (lanes.refuse), and its
+    state passes on to its successor.
+    """
+    pt = -1
+    if done >= 0:
+        pt = successors[done]
+        if pt >= 0 and not diverged:
+            states[pt, :] = states[done, :]
+    while control[len(control) - 1] == 0:
+        if pt < 0:
+            taken = _fetch_add(control, len(control) - 2)
+            if taken >= len(queue):
+                return -1
+            pt = queue[taken]
+        if params[pt, PARAM.max_periods] > 0.0:
+            return pt
+        lanes.refuse(metrics[pt], strobes[pt])
+        control[b] += 1
+        following = successors[pt]
+        if following >= 0:
+            states[following, :] = states[pt, :]
+        pt = following
+    return -1
+
+
+@intrinsic
+def _fetch_add(typingctx, counts, i):
+    """``counts[i] += 1`` as one atomic operation (int64 array); returns the value before."""
+    if not (isinstance(counts, types.Array) and counts.dtype == types.int64
+            and isinstance(i, types.Integer)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        array, index = args
+        ary = context.make_array(signature.args[0])(context, builder, array)
+        index = context.cast(builder, index, signature.args[1], types.intp)
+        pointer = cgutils.get_item_pointer(context, builder, signature.args[0], ary, [index])
+        return builder.atomic_rmw("add", pointer, context.get_constant(types.int64, 1),
+                                  "monotonic")
+
+    return types.int64(counts, i), codegen
+
+
+@njit(inline="always", **JIT)
+def _record(series, L, i):
+    """Row ``i`` of a recorded series (layouts.SERIES) from the point of lane 0."""
+    if i < series.shape[0]:
+        series[i, SERIES.x], series[i, SERIES.v] = L[LANE.x], L[LANE.v]
+        series[i, SERIES.voltage], series[i, SERIES.contact_force] = L[LANE.voltage], L[LANE.fc]
+
+
+def run_points(params, states, metrics, strobes, successors=None, on_points=None) -> None:
+    """Run every point to steady state, on all numba threads.
+
+    ``params[i]`` is a parameter row (``harvester_sweep.packing``), ``states[i]`` the state
+    (updated in place), ``metrics[i]`` and ``strobes[i]`` the outputs (layouts.METRIC;
+    the last S stroboscopic samples). Points are independent and each is computed by the
+    same instructions whichever lane or thread takes it, so a point's result does not
+    depend on the thread count or on the other points.
+
+    ``successors[i]``, when given, is the point that starts from point i's final state
+    (-1: none), one frequency on of a continuation line (it starts from its own
+    ``states`` when point i diverges); a point is named at most once and lines do not
+    close on themselves (else ValueError). A lane walks a line to its end, with no wait for
+    other lines. A point whose row has PARAM.max_periods = 0 is not run: its state passes on and its
+    outputs are left unwritten. ``on_points(n)``, when given, is called in this thread as
+    points finish (n: how many since the last call); the kernel then runs in another
+    thread, and stops taking points when ``on_points`` raises (or on KeyboardInterrupt).
+    """
+    n = params.shape[0]
+    successors = (np.full(n, -1, dtype=np.int64) if successors is None
+                  else np.ascontiguousarray(successors, dtype=np.int64))
+    heads = _line_heads(successors, n)
+    # Lines taken by forcing period (stable: in the callers' order within one): the lanes
+    # of a group then hold points whose contacts come at about the same step of the
+    # period, so that fewer steps of a group run the contact stages (the kernel of a
+    # 64 x 64 gap x frequency sweep built gap-major 3-4 % faster, best and median of 8
+    # alternated runs, measured when each thread had a queue of its own).
+    heads = heads[np.argsort(-params[heads, PARAM.period], kind="stable")]
+    threads = max(1, min(numba.get_num_threads(), len(heads)))
+    control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
+    args = (params, states, metrics, strobes, successors, heads, control)
+    if on_points is None:
+        _run_threads(*args)
+        return
+    failure = []
+
+    def run():
+        try:
+            numba.set_num_threads(threads)  # (numba's thread count is per calling thread)
+            _run_threads(*args)
+        except BaseException as error:  # raised again in the calling thread
+            failure.append(error)
+
+    worker = threading.Thread(target=run, name="harvester_sweep kernel", daemon=True)
+    worker.start()
+    reported = 0
+    try:
+        running = True
+        while running:  # (at least once: a kernel may end before it is first looked at)
+            worker.join(_POLL)
+            running = worker.is_alive()
+            done = int(control[:threads].sum())
+            if done > reported:
+                on_points(done - reported)
+                reported = done
+    finally:
+        control[-1] = 1  # a no-op once the kernel is done; else it stops taking points
+        worker.join()
+    if failure:
+        raise failure[0]
+
+
+_POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
+
+
+def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
+    """The first point of every line of ``successors`` (see run_points); ValueError where
+    they do not make lines."""
+    linked = successors[successors >= 0]
+    if successors.shape != (n,) or (successors < -1).any() or (linked >= n).any() \
+            or len(np.unique(linked)) != len(linked):
+        raise ValueError("successors: must hold, for each point, the index of another point "
+                         "or -1, no point named twice")
+    continued = np.zeros(n, dtype=bool)
+    continued[linked] = True
+    heads = np.flatnonzero(~continued)
+    walked, ahead = len(heads), heads
+    while ahead.size:  # one point further along every line per pass
+        ahead = successors[ahead]
+        ahead = ahead[ahead >= 0]
+        walked += ahead.size
+    if walked != n:  # the points left over close on themselves
+        raise ValueError("successors: a cycle of points (a line must have a first point)")
+    return heads
+
+
+@njit(parallel=True, nogil=True, **JIT)
+def _run_threads(params, states, metrics, strobes, successors, heads, control):
+    """Every thread takes lines from ``heads`` as its lanes need them (see _next_point),
+    so that the threads end together whatever the lines cost."""
+    no_series = np.empty((0, len(SERIES)))
+    for b in prange(len(control) - 2):
+        _run_queue(params, states, metrics, strobes, no_series, True, heads, successors,
+                   control, b)
+
+
+def warm_up() -> None:
+    """Compile :func:`run_points` (or load it from numba's on-disk cache) without running."""
+    run_points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros((0, len(METRIC))),
+               np.zeros((0, 0, N_STROBE)))
+
+
+def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarray:
+    """The point of parameter row ``row`` at every step over ``periods`` forcing periods
+    from ``state``, not modified.
+
+    Returns a float64 array of shape ``(periods * steps_per_period + 1, len(SERIES))``,
+    columns as layouts.SERIES.
+    """
+    row = row.copy()
+    row[PARAM.max_periods] = periods
+    n_steps = int(row[PARAM.steps])
+    series = np.empty((periods * n_steps + 1, len(SERIES)))
+    _run_queue(row[None, :], state.copy()[None, :], np.empty((1, len(METRIC))),
+               np.empty((1, 0, N_STROBE)), series, False, np.zeros(1, dtype=np.int64),
+               np.full(1, -1, dtype=np.int64), np.zeros(3, dtype=np.int64), 0)
+    return series

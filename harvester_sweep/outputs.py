@@ -1,0 +1,158 @@
+"""The one registry of outputs: every metric, status and recorded variable, with its
+name, CF units, long name and dtype.
+
+Everything that names an output is made from here: the engine's metric row is read
+through :func:`metric_index` (its order is the engine's, layouts.METRIC), the datasets'
+attributes, the CF ``flag_values``/``flag_meanings`` of ``status``, the scene's table and
+JSON, the command line's counts, the plots' labels and the README's table
+(:func:`markdown_table`). The names are the public interface: chosen once, kept.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._engine import METRIC, STATUS
+
+
+@dataclass(frozen=True)
+class Output:
+    """One output variable.
+
+    Attributes
+    ----------
+    name : str
+        Its name in datasets, JSON and tables.
+    units : str
+        CF units (``"1"`` for a dimensionless number).
+    long_name : str
+        CF long name.
+    dtype : str
+        numpy dtype of the dataset variable.
+    comment : str
+        CF comment: when the value is missing, or how it is made.
+    where : str
+        ``"engine"`` (a column of the engine's metric row), ``"run"`` (made around the
+        engine: error estimate, work done), ``"scene"`` (a scene's only) or ``"sweep"``.
+    """
+
+    name: str
+    units: str
+    long_name: str
+    dtype: str = "float64"
+    comment: str = ""
+    where: str = "engine"
+
+    @property
+    def attrs(self) -> dict:
+        """CF attributes of the dataset variable."""
+        attrs = {"units": self.units, "long_name": self.long_name}
+        if self.comment:
+            attrs["comment"] = self.comment
+        if self.name == "status":
+            attrs.update(STATUS_FLAGS)
+        return attrs
+
+    def label(self, prefix: str = "") -> str:
+        """Axis label ``name [unit]``, the unit with an SI ``prefix``."""
+        return f"{self.name} [{prefix}{'-' if self.units == '1' else self.units}]"
+
+
+@dataclass(frozen=True)
+class Status:
+    """One outcome of a point: its code (the engine's), name and what it means."""
+
+    code: int
+    name: str
+    meaning: str
+
+    @property
+    def flag(self) -> str:
+        """Its CF flag meaning (a word, no spaces)."""
+        return self.name.replace(" ", "_")
+
+
+STATUSES: tuple[Status, ...] = (
+    Status(STATUS.settled, "settled", "steady state found"),
+    Status(STATUS.not_settled, "not settled",
+           "no steady state within max_periods: metrics over the last 16 periods"),
+    Status(STATUS.diverged, "diverged",
+           "the integration diverged (step too coarse for the contact): no metrics"),
+    Status(STATUS.too_stiff, "too stiff",
+           "refused before integration: its step would exceed max_steps_per_period"),
+)
+assert [s.code for s in STATUSES] == list(STATUS)
+STATUS_NAMES = tuple(s.name for s in STATUSES)
+STATUS_FLAGS = {"flag_values": np.array([s.code for s in STATUSES], dtype="i1"),
+                "flag_meanings": " ".join(s.flag for s in STATUSES)}
+
+_NO_IMPACT = "NaN when the orbit has no impact (impacts_per_period = 0)"
+_OUTPUTS = (
+    # the engine's metric row, in its order
+    Output("power", "W", "mean electrical power V_rms^2/R over the orbit"),
+    Output("v_rms", "V", "root mean square voltage over the orbit"),
+    Output("v_peak", "V", "peak absolute voltage over the orbit"),
+    Output("power_peak", "W", "peak instantaneous electrical power v_peak^2/R"),
+    Output("x_max", "m", "largest tip displacement (positive towards the stop)"),
+    Output("x_min", "m", "smallest tip displacement"),
+    Output("contact_force_max", "N", "peak contact force"),
+    Output("impacts_per_period", "1", "impacts per forcing period"),
+    Output("approach_velocity", "m/s", "mean tip velocity at first touch of the stop",
+           comment=_NO_IMPACT),
+    Output("orbit_period", "1", "forcing periods per orbit (0 when not settled)", "int32"),
+    Output("status", "1", "outcome of the run", "int8",
+           comment="; ".join(f"{s.code} {s.name}: {s.meaning}" for s in STATUSES)),
+    Output("periods_run", "1", "forcing periods integrated", "int32"),
+    # made around the engine
+    Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max and "
+           "x_min: their change when the run is repeated at twice the steps per period",
+           comment="NaN where not estimated or not settled", where="run"),
+    Output("converged", "1", "steady state reached within the budget of periods (1) or not "
+           "(0)", "int8", where="scene"),
+    Output("steps_per_period", "1", "RK4 steps per forcing period", "int64", where="scene"),
+    Output("run_time", "s", "wall-clock integration time", where="scene"),
+    # a sweep's stroboscopic samples and a scene's recorded orbit
+    Output("strobe_displacement", "m", "tip displacement x at the last forcing period "
+           "boundaries y(nT)", where="sweep"),
+    Output("strobe_voltage", "V", "voltage across the load V at the last forcing period "
+           "boundaries y(nT)", where="sweep"),
+)
+OUTPUTS: dict[str, Output] = {o.name: o for o in _OUTPUTS}
+
+#: The engine's metrics, in the order of its metric row.
+ENGINE_METRICS = tuple(o.name for o in _OUTPUTS if o.where == "engine")
+assert ENGINE_METRICS == METRIC._fields, "the registry and the engine's metric row differ"
+
+#: A scene's recorded orbit: the columns of the engine's series (layouts.SERIES), in order,
+#: then the instantaneous power V^2/R.
+SERIES = {
+    "displacement": Output("displacement", "m", "tip displacement relative to the base x"),
+    "velocity": Output("velocity", "m/s", "tip velocity dx/dt"),
+    "voltage": Output("voltage", "V", "voltage across the load V"),
+    "contact_force": Output("contact_force", "N", "contact force of the stop F_c"),
+    "instantaneous_power": Output("instantaneous_power", "W",
+                                  "instantaneous electrical power V^2/R"),
+}
+
+
+def metric_index(name: str) -> int:
+    """Column of metric ``name`` in the engine's metric row."""
+    return getattr(METRIC, name)
+
+
+def markdown_table() -> str:
+    """The table of outputs in the README: name, units, meaning, when missing."""
+    rows = ["| name | unit | meaning |", "| --- | --- | --- |"]
+    for o in _OUTPUTS:
+        meaning = o.long_name + (f" ({o.comment})" if o.comment and o.name != "status" else "")
+        if o.name == "status":
+            meaning += ": " + ", ".join(f"{s.code} {s.name}" for s in STATUSES)
+        scope = {"scene": " (scene only)", "sweep": " (sweep, over `sample`)"}.get(o.where, "")
+        rows.append(f"| `{o.name}` | {'-' if o.units == '1' else o.units} | {meaning}{scope} |")
+    return "\n".join(rows)
+
+
+if __name__ == "__main__":  # python -m harvester_sweep.outputs: the README's table
+    print(markdown_table())

@@ -1,0 +1,122 @@
+"""Packing: the only place where validated parameter dicts become the engine's rows.
+
+A point's parameter row (layouts.PARAM) holds what the engine reads, in SI units, and
+its initial state (layouts.STATE) is the state at rest. Packing also decides which points
+are refused before integration: a point whose step would exceed ``max_steps_per_period``
+is *too stiff*; its row is marked so (a budget of 0 periods) and the engine writes its
+outputs as such without running it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import timescales
+from ._engine import PARAM, STATE
+from .contact import contact_damping_of, damping_factor
+from .parameters import TooStiffError
+
+
+def pack_parameters(p: dict) -> np.ndarray:
+    """The engine's parameter row (layouts.PARAM) of a validated parameter dict [SI]."""
+    wn = 2.0 * math.pi * p["natural_frequency"]
+    m = p["mass"]
+    latched = p["contact_damping"] is None and p["impact_velocity_mode"] == "latched"
+    row = np.zeros(len(PARAM))
+    row[PARAM.amplitude] = p["amplitude"]
+    row[PARAM.wn2] = wn * wn
+    row[PARAM.cm] = 2.0 * p["damping_ratio"] * wn
+    row[PARAM.thm] = p["coupling"] / m
+    row[PARAM.khm] = p["hertz_stiffness"] / m
+    row[PARAM.mass] = m
+    row[PARAM.gap] = p["gap"]
+    row[PARAM.ch] = contact_damping_of(p, p["impact_velocity"])
+    row[PARAM.latch] = damping_factor(p["contact_law"], p["restitution"]) if latched else 0.0
+    row[PARAM.irc] = 1.0 / (p["resistance"] * p["capacitance"])
+    row[PARAM.thc] = p["coupling"] / p["capacitance"]
+    row[PARAM.resistance] = p["resistance"]
+    row[PARAM.period] = 1.0 / p["frequency"]
+    row[PARAM.steps] = p["steps_per_period"]
+    row[PARAM.max_periods] = 0.0 if refusal(p) else p["max_periods"]
+    row[PARAM.tolerance] = p["settle_tolerance"]
+    static = p["amplitude"] / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
+    row[PARAM.x_limit] = 1e3 * (abs(p["gap"]) + static + 1e-9)
+    row[PARAM.locate] = 1.0 if p["locate_switches"] else 0.0
+    w = 2.0 * math.pi * p["frequency"]
+    row[PARAM.v_per_x] = w
+    tau = p["resistance"] * p["capacitance"]
+    row[PARAM.voltage_per_x] = p["coupling"] / p["capacitance"] * min(1.0, w * tau)
+    return row
+
+
+def initial_state(p: dict) -> np.ndarray:
+    """State at rest (layouts.STATE): ``(x_0 [m], 0, 0, impact_velocity [m/s])``.
+
+    At rest the mass sits at its static equilibrium ``k x_0 + k_h (x_0 - g)^1.5 = 0``: 0
+    unless the stop is preloaded (g < 0), then between g and 0 (found by bisection).
+    """
+    x0 = 0.0
+    k = p["mass"] * (2.0 * math.pi * p["natural_frequency"]) ** 2
+    kh, g = p["hertz_stiffness"], p["gap"]
+    if g < 0.0 and kh > 0.0:
+        low, high = g, 0.0
+        for _ in range(200):
+            x0 = 0.5 * (low + high)
+            if k * x0 + kh * (x0 - g) ** 1.5 > 0.0:
+                high = x0
+            else:
+                low = x0
+    state = np.zeros(len(STATE))
+    state[STATE.x], state[STATE.approach_velocity] = x0, p["impact_velocity"]
+    return state
+
+
+def refusal(p: dict) -> str | None:
+    """Why point ``p`` is refused before integration (too stiff), or None."""
+    steps = p["steps_per_period"]
+    if steps <= p["max_steps_per_period"]:
+        return None
+    rate, what = timescales.time_scales(p).fastest()
+    return (f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
+            f"{1 / (p['frequency'] * steps):.3g} s, {steps} steps per period, about "
+            f"{timescales.run_time_estimate(steps):.0f} s per point; raise "
+            f"max_steps_per_period [-] (now {p['max_steps_per_period']}) to run it anyway")
+
+
+def check_runnable(p: dict) -> None:
+    """Raise TooStiffError (a ParameterError) for a point that would be refused."""
+    reason = refusal(p)
+    if reason is not None:
+        raise TooStiffError(reason)
+
+
+@dataclass
+class Packed:
+    """Points packed for the engine.
+
+    Attributes
+    ----------
+    rows : numpy.ndarray
+        float64 (n, len(layouts.PARAM)): the parameter rows.
+    states : numpy.ndarray
+        float64 (n, len(layouts.STATE)): initial states, at rest.
+    refused : numpy.ndarray
+        bool (n,): refused before integration (too stiff).
+    """
+
+    rows: np.ndarray
+    states: np.ndarray
+    refused: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+
+def pack_points(points) -> Packed:
+    """Pack a sequence of validated parameter dicts, each from rest."""
+    rows = np.array([pack_parameters(p) for p in points]).reshape(-1, len(PARAM))
+    states = np.array([initial_state(p) for p in points]).reshape(-1, len(STATE))
+    return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0)
