@@ -1,6 +1,6 @@
 """What a user would otherwise pick: baselines for the speed benchmark, on the same equations.
 
-    python benchmarks/alternatives.py     # paper scene, 94 periods from rest, prints a table
+    python -m benchmarks.alternatives     # paper scene, 94 periods from rest, prints a table
 
 - ``lsoda``: SciPy ``solve_ivp(method="LSODA")`` with the switched right-hand side written as a
   user would write it, one ``if`` on the contact and no event restarts;
@@ -19,15 +19,12 @@ jax, diffrax and pytest-benchmark are optional: ``pip install ".[bench]"``.
 from __future__ import annotations
 
 import math
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from reference import Reference, lankarani_nikravesh_damping  # noqa: E402
+from tests.helpers import Reference, lankarani_nikravesh_damping
 
 ATOL_SCALE = np.array([1e-6, 1e-2, 1e-5])  # x [m], v [m/s], V [V]: atol = rtol * ATOL_SCALE
 INSTALL_HINT = 'jax and diffrax are needed for this baseline: pip install ".[bench]"'

@@ -1,7 +1,7 @@
 """Compare the speed of two checkouts of harvester_sweep in one process, runs alternated.
 
     git worktree add /tmp/before <commit>
-    python benchmarks/compare.py /tmp/before .   [--rounds 3]
+    python -m benchmarks.compare /tmp/before .   [--rounds 3]
 
 This machine's speed drifts by 5-10 % from minute to minute, more than many a change
 gains; two packages loaded side by side (as hs_a and hs_b, copied to a temporary folder)
@@ -26,10 +26,12 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numba
 import numpy as np
-from cases import FREE, GRID, HALF, STEPS_PER_PERIOD, sweep_spec
+
+from benchmarks.cases import FREE, GRID, HALF, STEPS_PER_PERIOD, sweep_spec
 
 SWEEPS = {  # name: (grid, directions)
     "64 x 64 sweep [M steps/s]": (GRID, None),
@@ -51,6 +53,22 @@ def _load(tag: str, checkout: Path, into: Path):
     return importlib.import_module(f"hs_{tag}")
 
 
+def _api(hs) -> SimpleNamespace:
+    """The engine's entry points in a checkout, before or after it became _engine/."""
+    try:
+        packing = importlib.import_module(hs.__name__ + ".packing")
+        engine = importlib.import_module(hs.__name__ + "._engine")
+        return SimpleNamespace(pack_parameters=packing.pack_parameters,
+                               initial_state=packing.initial_state,
+                               run_points=engine.run_points, n_metrics=len(engine.METRIC))
+    except ModuleNotFoundError:  # a checkout from before harvester_sweep._engine
+        kernel = importlib.import_module(hs.__name__ + ".kernel")
+        lanes = importlib.import_module(hs.__name__ + ".lanes")
+        return SimpleNamespace(pack_parameters=kernel.pack_parameters,
+                               initial_state=kernel.initial_state, run_points=lanes.run_points,
+                               n_metrics=kernel.NM)
+
+
 def _sweep_rate(hs, grid, directions=None) -> float:
     start = time.perf_counter()
     ds = hs.run_sweep(sweep_spec(grid, directions), None, progress=False)
@@ -63,15 +81,15 @@ def _points(hs, steps, gap, spread):
         extra = {} if gap is None else {"gap": gap}
         p = hs.resolve_parameters("paper", steps_per_period=steps, frequency=float(f),
                                   max_periods=PERIODS, settle_tolerance=1e-300, **extra)
-        rows.append(hs.kernel.pack_parameters(p))
-    rest = np.repeat(hs.kernel.initial_state(p)[None, :], 64, axis=0)
+        rows.append(hs.api.pack_parameters(p))
+    rest = np.repeat(hs.api.initial_state(p)[None, :], 64, axis=0)
     return np.array(rows), rest
 
 
 def _per_period(hs, rows, rest) -> float:
-    states, metrics = rest.copy(), np.empty((64, hs.kernel.NM))
+    states, metrics = rest.copy(), np.empty((64, hs.api.n_metrics))
     start = time.perf_counter()
-    hs.lanes.run_points(rows, states, metrics, np.empty((64, 0, 3)))
+    hs.api.run_points(rows, states, metrics, np.empty((64, 0, 3)))
     return (time.perf_counter() - start) / (64 * PERIODS)
 
 
@@ -85,8 +103,7 @@ def main(argv=None) -> None:
         sys.path.insert(0, tmp)
         mods = {"a": _load("a", args.a, Path(tmp)), "b": _load("b", args.b, Path(tmp))}
         for hs in mods.values():
-            hs.lanes = importlib.import_module(hs.__name__ + ".lanes")
-            hs.kernel = importlib.import_module(hs.__name__ + ".kernel")
+            hs.api = _api(hs)
             _sweep_rate(hs, {"gap": [1e-6], "frequency": [140.0]})  # compile
         points = {(t, name): _points(hs, *case) for t, hs in mods.items()
                   for name, case in POINTS.items()}

@@ -11,17 +11,14 @@ from __future__ import annotations
 
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
+from benchmarks.cases import COLD_START_ROUNDS, SWEEP_ROUNDS
 
-from cases import COLD_START_ROUNDS, SWEEP_ROUNDS  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 FIGURES: dict = {}
 RESULT = ROOT / "benchmarks" / "results" / "speed.md"

@@ -1,6 +1,6 @@
 """Error of the RK4 engine against run time on the paper scene, plain steps vs located switches.
 
-    python benchmarks/convergence.py            # prints a Markdown table
+    python -m benchmarks.convergence            # prints a Markdown table
 
 The reference is SciPy's DOP853 at rtol 1e-12, restarted at every contact switch
 (tests/reference.py), settled on the steady orbit. Run time is the best of 3 runs, after
@@ -10,17 +10,14 @@ compilation.
 from __future__ import annotations
 
 import platform
-import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-sys.path.insert(0, str(ROOT))  # this checkout's package, not an installed copy
-from reference import reference_orbit  # noqa: E402
+from harvester_sweep import run_scene
+from tests.helpers import reference_orbit
 
-from harvester_sweep import run_scene  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:

@@ -33,8 +33,10 @@ from pathlib import Path
 import numba
 import numpy as np
 import pytest
-from alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
-from cases import (
+
+import harvester_sweep as hs
+from benchmarks.alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
+from benchmarks.cases import (
     ALTERNATIVE_ROUNDS,
     COLD_START_ROUNDS,
     ENGINE_ROUNDS,
@@ -45,10 +47,10 @@ from cases import (
     SWEEP_ROUNDS,
     sweep_spec,
 )
-from reference import Reference
-
-import harvester_sweep as hs
-from harvester_sweep import kernel, lanes
+from harvester_sweep import _engine, packing
+from harvester_sweep._engine import GROUP, LANE, LANES, lanes
+from harvester_sweep._engine.flags import JIT
+from tests.helpers import Reference
 
 ROOT = Path(__file__).resolve().parents[1]
 ENSEMBLE = 64
@@ -93,13 +95,13 @@ def test_sweep_swept_up_and_down(benchmark, figures, tmp_path):
     figures["continued_rate"] = _rate(benchmark, HALF, tmp_path, ["up", "down"])[0]
 
 
-@numba.njit(fastmath=kernel.FASTMATH, error_model="numpy")
+@numba.njit(**{**JIT, "cache": False})
 def _lane_loop(L, steps):
     """``steps`` plain steps of the lane loop alone (no scalar finishing, no period ends)."""
-    for j in range(lanes.LANES):
-        L[lanes._KEND + j] = np.inf  # never at a stop
+    for j in range(LANES):
+        L[LANE.k_end + j] = np.inf  # never at a stop
     for _ in range(steps):
-        lanes._lane_steps(L, lanes.LANES // lanes.GROUP, 0.0)
+        lanes.lane_steps(L, LANES // GROUP, 0.0)
 
 
 def test_lane_loop_alone(benchmark, figures):
@@ -108,18 +110,18 @@ def test_lane_loop_alone(benchmark, figures):
     numba_threads = numba.get_num_threads()
     rates = {}
     for touching in (0.0, 1.0):
-        L = lanes._table()
-        for j in range(lanes.LANES):
+        L = lanes.table()
+        for j in range(LANES):
             p = hs.resolve_parameters("paper", steps_per_period=1024, frequency=100.0 + 5 * j)
-            lanes._load(L, j, kernel.pack_parameters(p), kernel.initial_state(p), 0.0)
-            L[lanes._ON + j] = touching
+            lanes.load(L, j, packing.pack_parameters(p), packing.initial_state(p), 0.0)
+            L[LANE.on + j] = touching
         _lane_loop(L, 10)
         steps = 200_000
 
         def run(L=L):
             start = time.perf_counter()
             _lane_loop(L, steps)
-            rates.setdefault(touching, []).append(lanes.LANES * steps
+            rates.setdefault(touching, []).append(LANES * steps
                                                   / (time.perf_counter() - start))
 
         benchmark.pedantic(run, rounds=3, iterations=1) if touching else run()
@@ -149,11 +151,11 @@ def test_engine_per_point(benchmark, figures, paper):
     """The engine on all cores (its default) and on one (numba.set_num_threads(1)), as
     SciPy and XLA run these baselines on one core."""
     p, periods, exact = paper
-    rows = np.repeat(kernel.pack_parameters(p)[None, :], ENSEMBLE, axis=0)
-    rest = np.repeat(kernel.initial_state(p)[None, :], ENSEMBLE, axis=0)
-    metrics = np.empty((ENSEMBLE, kernel.NM))
+    rows = np.repeat(packing.pack_parameters(p)[None, :], ENSEMBLE, axis=0)
+    rest = np.repeat(packing.initial_state(p)[None, :], ENSEMBLE, axis=0)
+    metrics = np.empty((ENSEMBLE, len(_engine.METRIC)))
     strobes = np.empty((ENSEMBLE, 0, 3))
-    lanes.warm_up()
+    _engine.warm_up()
     threads = numba.get_num_threads()
     times, out = {}, {}
 
@@ -164,17 +166,17 @@ def test_engine_per_point(benchmark, figures, paper):
             # on this virtual machine (after 0.2 s idle, a two-thread run of 64 points at
             # 1e-5 took 0.24 ms a point, median of 30 runs, against 0.14 back to back);
             # a sweep pays that once, not per point.
-            lanes.run_points(rows, rest.copy(), metrics, strobes)
+            _engine.run_points(rows, rest.copy(), metrics, strobes)
             states = rest.copy()
             start = time.perf_counter()
-            lanes.run_points(rows, states, metrics, strobes)
+            _engine.run_points(rows, states, metrics, strobes)
             times.setdefault(n, []).append(time.perf_counter() - start)
             assert np.all(states == states[0])  # every lane the same bits
             out[n] = states
         numba.set_num_threads(threads)
 
     benchmark.pedantic(run, rounds=ENGINE_ROUNDS, iterations=1)
-    assert np.all(metrics[:, kernel.M_PERIODS] == periods)
+    assert np.all(metrics[:, _engine.METRIC.periods_run] == periods)
     assert np.array_equal(out[1], out[threads])  # and on any thread count
     figures["ensemble"] = ENSEMBLE
     figures.setdefault("points", {})[p["accuracy"]] = {

@@ -1,7 +1,7 @@
 """Work-precision benchmark: error against run time, the RK4 engine against SciPy's solvers.
 
-    python benchmarks/work_precision.py            # full run, writes benchmarks/results/
-    python benchmarks/work_precision.py --quick    # smoke test, writes *_quick.md/.png
+    python -m benchmarks.work_precision            # full run, writes benchmarks/results/
+    python -m benchmarks.work_precision --quick    # smoke test, writes *_quick.md/.png
 
 Task (fixed horizon): integrate from rest for K = 40 forcing periods and measure
 
@@ -472,14 +472,14 @@ def main(argv=None) -> None:
                              "work_precision_quick.md/.png")
     args = parser.parse_args(argv)
     config = QUICK if args.quick else FULL
-    command = "python benchmarks/work_precision.py" + (" --quick" if args.quick else "")
+    command = "python -m benchmarks.work_precision" + (" --quick" if args.quick else "")
     wall = time.perf_counter()
     # One point runs on one thread anyway; a one-thread team keeps the engine's timing free
     # of thread wake-ups on a loaded machine (SciPy is single-threaded too).
     numba.set_num_threads(1)
-    from harvester_sweep import kernel
+    from harvester_sweep._engine.steady import MAX_ORBIT_PERIOD
 
-    assert kernel.MAX_ORBIT_PERIOD == WINDOW, "the engine's metrics window changed"
+    assert MAX_ORBIT_PERIOD == WINDOW, "the engine's metrics window changed"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run_scene("paper", steps_per_period=64, max_periods=1)  # compile / load the cache

@@ -9,10 +9,10 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from test_sweep import assert_same_bits, spec
 
 from harvester_sweep import cli
 from harvester_sweep.sweep import run_sweep
+from tests.helpers import assert_same_bits, spec
 
 SWEEP = spec({"frequency": [200.0, 230.0, 260.0], "gap": [1e-6, 2e-6]},
              directions=["up", "down"], outputs=["power", "x_max", "strobe"], samples=3,
@@ -42,7 +42,7 @@ def scheduler(tmp_path_factory):
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     # The worker must import harvester_sweep even when it is not installed.
-    root = str(Path(__file__).parents[1])
+    root = str(Path(__file__).parents[2])
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         p for p in (root, os.environ.get("PYTHONPATH")) if p))
     tmp_path = tmp_path_factory.mktemp("dask")

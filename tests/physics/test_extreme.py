@@ -4,10 +4,10 @@ import math
 
 import numpy as np
 import pytest
-from reference import phasor, reference_orbit
 
 from harvester_sweep import ParameterError, run_scene, run_sweep
 from harvester_sweep.cli import main
+from tests.helpers import phasor, reference_orbit
 
 # (overrides, SciPy method of the reference, reference periods to settle, peaks compared?)
 # The reference samples its dense output 40000 times per period: it cannot resolve the

@@ -1,4 +1,5 @@
-"""Independent references for the tests, written from MODEL.md, not from the package.
+"""Shared helpers of the tests: independent references written from the model's equations
+(docs/model.md), not from the package, and sweep helpers.
 
 - ``phasor``: closed-form steady state of the linear harvester (no stop);
 - ``Reference``: the same equations integrated by SciPy's ``solve_ivp`` at tight tolerance,
@@ -11,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import xarray as xr
 from scipy.integrate import solve_ivp
 
 
@@ -126,3 +128,21 @@ def reference_orbit(result, periods_to_settle=40, method="DOP853", rtol=1e-12):
         "approach_velocity": float(np.mean(ref.onset_velocities)),
         "impacts_per_period": len(ref.onset_velocities),
     }
+
+
+FAST = {"steps_per_period": 256, "max_periods": 2000}
+
+
+def spec(grid, parameters=None, **options):
+    """A sweep of the paper scene over ``grid`` at a fixed, fast step."""
+    return {"preset": "paper", "parameters": {**FAST, **(parameters or {})}, "grid": grid,
+            "sweep": options}
+
+
+def assert_same_bits(a: xr.Dataset, b: xr.Dataset) -> None:
+    """Same variables, coordinates and dims, every value identical bit for bit."""
+    assert set(a.variables) == set(b.variables)
+    for name in a.variables:
+        assert a[name].dims == b[name].dims, name
+        assert a[name].dtype == b[name].dtype, name
+        assert a[name].values.tobytes() == b[name].values.tobytes(), name

@@ -5,10 +5,10 @@ import math
 
 import numpy as np
 import pytest
-from reference import reference_orbit
 from scipy.integrate import simpson
 
 from harvester_sweep import run_scene
+from tests.helpers import reference_orbit
 
 SCENES = {
     "paper": dict(preset="paper"),

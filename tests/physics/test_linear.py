@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
-from reference import phasor
 
 from harvester_sweep import run_scene
+from tests.helpers import phasor
 
 FREQUENCIES = [50.0, 100.0, 140.0, 150.0, 200.0, 300.0]  # Hz
 RESISTANCES = [10.0, 1e3, 1e5, 1e7]  # Ohm

@@ -6,7 +6,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from harvester_sweep import PARAMETERS, ParameterError, resolve_parameters, run_scene
+from harvester_sweep import (
+    PARAMETERS,
+    ParameterError,
+    TooStiffError,
+    resolve_parameters,
+    run_scene,
+)
 from harvester_sweep.materials import MATERIALS, hertz_stiffness_from_bodies
 from harvester_sweep.parameters import StabilityWarning
 
@@ -66,9 +72,12 @@ def test_explicit_step_beyond_contact_bound_warns():
 
 
 def test_too_stiff_is_refused_with_step_and_time():
-    with pytest.raises(ParameterError, match=r"too stiff: .* needs a step <= .* s, \d+ steps "
+    """Resolved (its step chosen), then refused by packing before any integration."""
+    p = resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
+    assert p["steps_per_period"] > 100_000
+    with pytest.raises(TooStiffError, match=r"too stiff: .* needs a step <= .* s, \d+ steps "
                        r"per period, about \d+ s per point"):
-        resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
+        run_scene("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
 
 
 def test_paper_preset_states_its_assumptions():

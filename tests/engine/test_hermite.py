@@ -5,7 +5,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from harvester_sweep import kernel
+from harvester_sweep._engine import hermite
 
 H = 1e-4  # step [s]
 
@@ -30,7 +30,7 @@ def test_extremum_of_a_cubic(s1, s2, p3, p0):
     (ends included), with the other critical point anywhere outside."""
     data, exact = _extremum(s1 * H, s2 * H, p3, p0)
     swing = abs(p3) * H ** 3 * (1.0 + abs(s2)) + abs(p0)
-    assert abs(kernel._hermite_extremum(*data, H) - exact) <= 1e-12 * swing
+    assert abs(hermite.extremum(*data, H) - exact) <= 1e-12 * swing
 
 
 @given(s1=st.floats(0.0, 1.0), curvature=st.sampled_from([-4.0, 1e3]))
@@ -39,7 +39,7 @@ def test_extremum_of_a_parabola(s1, curvature):
     t1 = s1 * H
     data = (curvature * t1 ** 2, -2 * curvature * t1, curvature * (H - t1) ** 2,
             2 * curvature * (H - t1))
-    assert abs(kernel._hermite_extremum(*data, H)) <= 1e-12 * abs(curvature) * H ** 2
+    assert abs(hermite.extremum(*data, H)) <= 1e-12 * abs(curvature) * H ** 2
 
 
 def test_extremum_of_a_sampled_cosine():
@@ -50,4 +50,4 @@ def test_extremum_of_a_sampled_cosine():
     for t0 in np.linspace(-h, 0.0, 11):
         data = (np.cos(w * t0), -w * np.sin(w * t0), np.cos(w * (t0 + h)),
                 -w * np.sin(w * (t0 + h)))
-        assert abs(kernel._hermite_extremum(*data, h) - 1.0) <= (w * h) ** 4 / 100
+        assert abs(hermite.extremum(*data, h) - 1.0) <= (w * h) ** 4 / 100

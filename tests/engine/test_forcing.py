@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from harvester_sweep.kernel import _forcing
+from harvester_sweep._engine.rk4 import forcing as _forcing
 
 
 def test_forcing_series_matches_sin_down_to_16_steps_per_period():

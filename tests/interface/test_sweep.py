@@ -8,29 +8,13 @@ import numba
 import numpy as np
 import pytest
 import xarray as xr
-from reference import phasor
 
-from harvester_sweep import cli, datasets, sweep
+from harvester_sweep import chunk_store, chunks, cli, datasets, sweep
 from harvester_sweep.parameters import ParameterError, resolve_parameters
 from harvester_sweep.scene import run_scene
 from harvester_sweep.sweep import run_sweep
 from harvester_sweep.sweep_file import load_sweep
-
-FAST = {"steps_per_period": 256, "max_periods": 2000}
-
-
-def spec(grid, parameters=None, **options):
-    return {"preset": "paper", "parameters": {**FAST, **(parameters or {})}, "grid": grid,
-            "sweep": options}
-
-
-def assert_same_bits(a: xr.Dataset, b: xr.Dataset) -> None:
-    """Same variables, coordinates and dims, every value identical bit for bit."""
-    assert set(a.variables) == set(b.variables)
-    for name in a.variables:
-        assert a[name].dims == b[name].dims, name
-        assert a[name].dtype == b[name].dtype, name
-        assert a[name].values.tobytes() == b[name].values.tobytes(), name
+from tests.helpers import FAST, assert_same_bits, phasor, spec
 
 
 def test_up_sweep_stays_on_the_impacting_branch_and_down_sweep_on_the_linear_one():
@@ -116,7 +100,7 @@ def test_outputs_select_what_is_computed_and_stored():
     # error_estimate: on a sample of points unless sweep.error_estimate = "none"
     assert set(ds.data_vars) == {"power", "status", "periods_run", "error_estimate"}
     assert "sample" not in ds.dims
-    chunk = sweep.compute_chunk(load_sweep(spec(grid, outputs=["power"])), 0)
+    chunk = chunks.compute_chunk(load_sweep(spec(grid, outputs=["power"])), 0)
     assert chunk["strobe"].shape[2] == 0  # the kernel got S = 0: no strobe buffers
 
     ds = run_sweep(spec(grid, outputs=["x_max", "strobe"], samples=5), progress=False)
@@ -168,13 +152,13 @@ def test_resume_after_an_interruption_gives_the_uninterrupted_file(tmp_path, mon
     whole = run_sweep(sweep_dict, tmp_path / "whole.nc", progress=False)
 
     out = tmp_path / "part.nc"
-    save = sweep._ChunkStore.save
+    save = chunk_store.ChunkStore.save
 
     def save_then_stop(self, chunk, result):
         save(self, chunk, result)
         raise Interrupted  # as if killed right after the first chunk reached the disk
 
-    monkeypatch.setattr(sweep._ChunkStore, "save", save_then_stop)
+    monkeypatch.setattr(chunk_store.ChunkStore, "save", save_then_stop)
     with pytest.raises(Interrupted):
         run_sweep(sweep_dict, out, progress=False)
     monkeypatch.undo()
@@ -324,7 +308,7 @@ def test_plot_draws_maps_of_two_axes_and_refuses_three(tmp_path):
 def test_example_sweep_file_is_valid():
     from pathlib import Path
 
-    example = Path(__file__).parents[1] / "examples" / "paper_frequency_response.toml"
+    example = Path(__file__).parents[2] / "examples" / "paper_frequency_response.toml"
     loaded = load_sweep(example)
     assert loaded.directions == ("up", "down") and loaded.fixed["gap"] == 1e-6
     assert loaded.grid["frequency"][[0, -1]].tolist() == [100.0, 300.0]

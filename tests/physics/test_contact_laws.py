@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from harvester_sweep import kernel, lanes, resolve_parameters
+from harvester_sweep import _engine, packing, resolve_parameters
 
 LAWS = ["lankarani_nikravesh", "hunt_crossley", "flores", "gonthier"]
 V_IN = 0.01  # m/s
@@ -18,7 +18,7 @@ def _impact(restitution, law="lankarani_nikravesh", mode="latched", **extra):
                            restitution=restitution, contact_law=law, impact_velocity_mode=mode,
                            **extra)
     state = np.array([-1e-6, V_IN, 0.0, p["impact_velocity"]])
-    series = lanes.record_series(kernel.pack_parameters(p), state, 1)
+    series = _engine.record_series(packing.pack_parameters(p), state, 1)
     step = 1.0 / (p["frequency"] * p["steps_per_period"])
     return p, series, step
 
