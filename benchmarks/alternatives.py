@@ -8,7 +8,7 @@
   the contact switch a ``jnp.where`` in the right-hand side, as a GPU/XLA user would write it.
 
 Both integrate (x [m], v [m/s], V [V]) of MODEL.md from rest over a whole number of forcing
-periods and return the final state, so that each can be compared with ``tests/reference.py``.
+periods and return the final state, so that each can be compared with ``tests/helpers.py``.
 The absolute tolerance is ``rtol`` times (1e-6 m, 1e-2 m/s, 1e-5 V), the scales of the paper
 scene (gap 1 um, velocities of mm/s to cm/s, tens of microvolts), the same scales the error is
 measured in.
@@ -35,7 +35,7 @@ def coefficients(p: dict) -> dict:
 
     Returns m [kg], k [N/m], c [N s/m], w [rad/s], theta [N/V], Cp [F], R [Ohm], A [m/s^2],
     g [m], kh [N/m^1.5] and ch [s/m]; ch is Lankarani-Nikravesh 3 (1 - e^2) / (4 v_imp) when
-    ``p["contact_damping"]`` is None, as in ``tests/reference.py``.
+    ``p["contact_damping"]`` is None, as in ``tests/helpers.py``.
     """
     wn = 2 * math.pi * p["natural_frequency"]
     m = p["mass"]

@@ -3,7 +3,7 @@
     python -m benchmarks.convergence            # prints a Markdown table
 
 The reference is SciPy's DOP853 at rtol 1e-12, restarted at every contact switch
-(tests/reference.py), settled on the steady orbit. Run time is the best of 3 runs, after
+(tests/helpers.py), settled on the steady orbit. Run time is the best of 3 runs, after
 compilation.
 """
 

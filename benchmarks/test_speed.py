@@ -13,7 +13,7 @@ table, every ratio taken within this run, and writes benchmarks/results/speed.md
 - per point at matched error: the paper scene from rest to steady state for an ensemble of
   64 copies (the engine's lanes, a diffrax ``vmap``) against SciPy LSODA, at the engine's
   default accuracy (1e-7) and at 1e-5; the final state is compared with
-  tests/reference.py, and each alternative's time is interpolated (log-log, between the
+  tests/helpers.py, and each alternative's time is interpolated (log-log, between the
   two tolerances that bracket it) to the engine's error;
 - each time the best of a few runs (the counts and why: cases.py);
 - a new process running a one-point sweep with the on-disk cache warm;

@@ -29,7 +29,7 @@ Methods:
   event location of dV/dt = 0 (a root search on the solver's own interpolant) over the last
   16 periods.
 
-Reference: ``tests/reference.py`` (SciPy DOP853 restarted exactly at every contact onset and
+Reference: ``tests/helpers.py`` (SciPy DOP853 restarted exactly at every contact onset and
 separation, quadratures in the state) at rtol 1e-13, checked against the same at rtol 1e-12;
 its peak voltage comes from roots of dV/dt on each piece's dense output (brentq).
 
@@ -378,7 +378,7 @@ def machine_lines(command):
             return ""
 
     changed = sorted({line[3:] for line in git("status", "--porcelain", "--", "harvester_sweep",
-                                                "tests/reference.py").splitlines()})
+                                                "tests/helpers.py").splitlines()})
     return [
         f"- command: `{command}`",
         f"- date: {datetime.datetime.now().isoformat(timespec='seconds')}",
@@ -535,7 +535,7 @@ def main(argv=None) -> None:
     lines += machine_lines(command)
     lines += [
         "",
-        f"Errors are relative to the reference (tests/reference.py, DOP853 restarted at every "
+        f"Errors are relative to the reference (tests/helpers.py, DOP853 restarted at every "
         f"contact onset and separation, rtol {config['ref_rtol']:.0e}): mean power V^2/R and "
         f"peak |V| over the last {WINDOW} of {K} forcing periods, final state (x, v, V) as "
         "max over components of |diff| / amplitude over the window. The 'reference check' "

@@ -1,4 +1,4 @@
-"""The contact case against SciPy on the same equations (tests/reference.py), energy balance
+"""The contact case against SciPy on the same equations (tests/helpers.py), energy balance
 and the paper's published approach velocity."""
 
 import math
