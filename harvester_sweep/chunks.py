@@ -12,14 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._engine import STATE
-from .outputs import metric_index
+from .outputs import STROBES, metric_index
 from .packing import pack_points
 from .results import solve
-
-#: The stroboscopic samples a chunk keeps, in the order of its ``strobe`` columns: dataset
-#: variable -> column of the engine's samples.
-STROBES = {"strobe_displacement": STATE.x, "strobe_voltage": STATE.voltage}
 
 
 def chunk_points(spec, chunk: int) -> int:
@@ -47,7 +42,7 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
     dict
         ``metrics``: float64 (lines, points per line, len(spec.metrics)) in ascending
         frequency order; ``strobe``: float64 (lines, points per line, samples, 2) holding
-        the samples of STROBES, x [m] and V [V]; ``error_estimate``: float64 (lines,
+        the samples of outputs.STROBES, x [m] and V [V]; ``error_estimate``: float64 (lines,
         points per line) [-]; ``run_time``: integration time [s].
     """
     import numba

@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .chunks import STROBES
-from .outputs import OUTPUTS, SERIES, STATUS_NAMES
+from .outputs import OUTPUTS, SERIES, STATUS_NAMES, STROBES
 from .parameters import PARAMETERS, PRESET_NOTES
 
 
@@ -47,7 +46,7 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
 
     ``spec`` is a :class:`harvester_sweep.sweep_file.SweepSpec`; each chunk a dict of
     ``metrics`` (lines, points per line, len(spec.metrics)), ``strobe`` (..., samples, 2:
-    x [m], V [V]), ``error_estimate`` and ``run_time`` [s] (see sweep.compute_chunk).
+    x [m], V [V]), ``error_estimate`` and ``run_time`` [s] (see chunks.compute_chunk).
     Variables: the metrics of ``spec.metrics``, ``error_estimate``, ``strobe_displacement``
     and ``strobe_voltage`` over ``sample`` when stroboscopic samples were asked; units,
     long names, dtypes and flags from the registry (:mod:`harvester_sweep.outputs`).

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._engine import METRIC, STATUS
+from ._engine import METRIC, STATE, STATUS
 
 
 @dataclass(frozen=True)
@@ -124,6 +124,10 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in _OUTPUTS}
 #: The engine's metrics, in the order of its metric row.
 ENGINE_METRICS = tuple(o.name for o in _OUTPUTS if o.where == "engine")
 assert ENGINE_METRICS == METRIC._fields, "the registry and the engine's metric row differ"
+
+#: The stroboscopic samples a sweep keeps, in the order of a chunk's ``strobe`` columns:
+#: dataset variable -> column of the engine's samples (layouts.STATE).
+STROBES = {"strobe_displacement": STATE.x, "strobe_voltage": STATE.voltage}
 
 #: A scene's recorded orbit: the columns of the engine's series (layouts.SERIES), in order,
 #: then the instantaneous power V^2/R.
