@@ -2,7 +2,7 @@
 
 Every law here gives the damping factor of ``F_c = k_h delta^1.5 (1 + c_h v)`` as
 ``c_h = factor(e) / v_imp`` [s/m], with ``e`` the coefficient of restitution and ``v_imp``
-the approach velocity [m/s] (MODEL.md):
+the approach velocity [m/s] (docs/model.md):
 
 - Lankarani-Nikravesh: ``3 (1 - e^2) / 4`` (the paper's law, Eq. 7 corrected);
 - Hunt-Crossley: ``3 (1 - e) / 2``;

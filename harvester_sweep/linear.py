@@ -1,4 +1,4 @@
-"""Closed-form steady state of the harvester without its stop (phasors, MODEL.md)."""
+"""Closed-form steady state of the harvester without its stop (phasors, docs/model.md)."""
 
 from __future__ import annotations
 

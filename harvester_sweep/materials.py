@@ -66,7 +66,7 @@ def hertz_stiffness_from_bodies(
 
     ``k_h = 4 / (3 pi (h_1 + h_2)) * sqrt(R_1 R_2 / (R_1 + R_2))`` with
     ``h_i = (1 - nu_i^2) / (pi E_i)`` and ``R_i`` from :func:`equivalent_radius`
-    (the paper's Eqs. 4-6 as corrected in MODEL.md: the square root and ``1 - nu^2``).
+    (the paper's Eqs. 4-6 as corrected in docs/model.md: the square root and ``1 - nu^2``).
 
     Parameters
     ----------

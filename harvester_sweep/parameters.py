@@ -173,7 +173,7 @@ PARAMETERS: dict[str, Parameter] = {
     ]
 }
 
-#: Parameters every preset starts from (the paper's Table 1 with the corrections of MODEL.md).
+#: Parameters every preset starts from (the paper's Table 1 with the corrections of docs/model.md).
 _TABLE_1 = dict(
     mass=2.5e-3,
     natural_frequency=150.0,
@@ -213,7 +213,7 @@ PRESET_NOTES: dict[str, list[str]] = {
         "Mereles et al., Table 1; coupling = k d33 = 4.2e-7 N/V (Eq. 8)",
         "capacitance 100 nF is assumed: Table 1 gives none",
         "contact damping from Lankarani-Nikravesh c_h = 3(1-e^2)/(4 v_imp) = 118 s/m "
-        "(the printed 1.07e11 counts k_h twice, see MODEL.md)",
+        "(the printed 1.07e11 counts k_h twice, see docs/model.md)",
     ],
     "strong_coupling": [
         "the paper scene with coupling 3e-3 N/V, a device-like coupling giving ~0.1 V",
