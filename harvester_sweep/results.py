@@ -48,12 +48,6 @@ class Results:
     errors: np.ndarray
     run_time: float
 
-    def column(self, name: str) -> np.ndarray:
-        """Metric ``name`` of every point (an engine metric, or ``error_estimate``)."""
-        if name == "error_estimate":
-            return self.errors
-        return self.metrics[:, getattr(METRIC, name)]
-
     def point(self, i: int) -> dict:
         """Metrics of point ``i`` by name, as plain Python values: ``status`` by name,
         integers for counts, None for a missing value (no impact, not estimated)."""

@@ -19,18 +19,7 @@ final states. One concept per module:
 
 from . import cache, hermite, lanes, model, rk4, scheduler, steady
 from .cache import SOURCE_DIGEST
-from .layouts import (
-    ACC,
-    LANE,
-    LANES,
-    METRIC,
-    N_STROBE,
-    N_VALUES,
-    PARAM,
-    SERIES,
-    STATE,
-    STATUS,
-)
+from .layouts import LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
 from .scheduler import record_series, run_points, warm_up
 
 cache.flush_if_changed(scheduler._run_threads, (hermite, lanes, model, rk4, scheduler, steady))
@@ -42,12 +31,10 @@ def cache_warm() -> bool:
 
 
 __all__ = [
-    "ACC",
     "LANE",
     "LANES",
     "METRIC",
     "N_STROBE",
-    "N_VALUES",
     "PARAM",
     "SERIES",
     "SOURCE_DIGEST",
