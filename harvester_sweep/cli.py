@@ -80,7 +80,7 @@ def _announce_compilation() -> None:
 
     if not cache_warm():
         print("harvester-sweep: compiling the RK4 kernel into numba's on-disk cache (first "
-              "run only, about 30 s)", file=sys.stderr, flush=True)
+              "run only, 1-2 minutes)", file=sys.stderr, flush=True)
 
 
 def _scene(args) -> int:

@@ -57,7 +57,7 @@ def flush_if_changed(entry, modules) -> None:
 
 def is_warm(entry) -> bool:
     """Whether ``entry`` (a dispatcher) is in numba's on-disk cache; if not, its first call
-    compiles the engine (about 30 s)."""
+    compiles the engine (1-2 minutes)."""
     if _FLUSHED:
         return False
     try:

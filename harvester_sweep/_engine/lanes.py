@@ -194,6 +194,15 @@ def _trial_group(L, j0):
 
 
 @njit(inline="always", **JIT)
+def _increment(L, row, x, v, V, s0, c0):
+    """One row of the contact-free step's increment: the map's five entries in the lane
+    table from ``row`` on (rows LANES apart: LANE.mxx ... LANE.mxc for x) times
+    (x, v, V, sin, cos)."""
+    return (L[row] * x + L[row + LANES] * v + L[row + 2 * LANES] * V + L[row + 3 * LANES] * s0
+            + L[row + 4 * LANES] * c0)
+
+
+@njit(inline="always", **JIT)
 def _trial_steps(L, j0, contact):
     """The trial step of group j0's lanes: the contact-free map (see the rows LANE.mxx...),
     and with ``contact`` the RK4 stages with the contact force for the lanes in contact,
@@ -206,27 +215,9 @@ def _trial_steps(L, j0, contact):
             L[LANE.sin + j],
             L[LANE.cos + j],
         )
-        xn = x + (
-            L[LANE.mxx + j] * x
-            + L[LANE.mxv + j] * v
-            + L[LANE.mxe + j] * V
-            + L[LANE.mxs + j] * s0
-            + L[LANE.mxc + j] * c0
-        )
-        vn = v + (
-            L[LANE.mvx + j] * x
-            + L[LANE.mvv + j] * v
-            + L[LANE.mve + j] * V
-            + L[LANE.mvs + j] * s0
-            + L[LANE.mvc + j] * c0
-        )
-        Vn = V + (
-            L[LANE.mex + j] * x
-            + L[LANE.mev + j] * v
-            + L[LANE.mee + j] * V
-            + L[LANE.mes + j] * s0
-            + L[LANE.mec + j] * c0
-        )
+        xn = x + _increment(L, LANE.mxx + j, x, v, V, s0, c0)
+        vn = v + _increment(L, LANE.mvx + j, x, v, V, s0, c0)
+        Vn = V + _increment(L, LANE.mex + j, x, v, V, s0, c0)
         L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = xn, vn, Vn
     if contact:
         for j in range(j0, j0 + GROUP):
