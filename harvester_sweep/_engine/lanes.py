@@ -194,6 +194,12 @@ def _trial_group(L, j0):
 
 
 @njit(inline="always", **JIT)
+def _state(L, j):
+    """Lane ``j``'s x [m], v [m/s], V [V] and the sin, cos of its forcing phase."""
+    return L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j], L[LANE.sin + j], L[LANE.cos + j]
+
+
+@njit(inline="always", **JIT)
 def _increment(L, row, x, v, V, s0, c0):
     """One row of the contact-free step's increment: the map's five entries in the lane
     table from ``row`` on (rows LANES apart: LANE.mxx ... LANE.mxc for x) times
@@ -208,26 +214,14 @@ def _trial_steps(L, j0, contact):
     and with ``contact`` the RK4 stages with the contact force for the lanes in contact,
     chosen lane by lane (a lane out of contact gets the same bits either way)."""
     for j in range(j0, j0 + GROUP):
-        x, v, V, s0, c0 = (
-            L[LANE.x + j],
-            L[LANE.v + j],
-            L[LANE.voltage + j],
-            L[LANE.sin + j],
-            L[LANE.cos + j],
-        )
+        x, v, V, s0, c0 = _state(L, j)
         xn = x + _increment(L, LANE.mxx + j, x, v, V, s0, c0)
         vn = v + _increment(L, LANE.mvx + j, x, v, V, s0, c0)
         Vn = V + _increment(L, LANE.mex + j, x, v, V, s0, c0)
         L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = xn, vn, Vn
     if contact:
         for j in range(j0, j0 + GROUP):
-            x, v, V, s0, c0 = (
-                L[LANE.x + j],
-                L[LANE.v + j],
-                L[LANE.voltage + j],
-                L[LANE.sin + j],
-                L[LANE.cos + j],
-            )
+            x, v, V, s0, c0 = _state(L, j)
             A, ca, sa = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j]
             sm = s0 * ca + c0 * sa
             s1 = sm * ca + (c0 * ca - s0 * sa) * sa
@@ -335,6 +329,17 @@ def _quarter(L, j):
     )
 
 
+# The rows a lane taking quarter steps copies into its packed slot: (packed, lane) rows.
+_QUARTER_ROWS = (
+    (LANE.q_x, LANE.x), (LANE.q_v, LANE.v), (LANE.q_voltage, LANE.voltage),
+    (LANE.q_sin, LANE.sin), (LANE.q_cos, LANE.cos), (LANE.q_amplitude, LANE.amplitude),
+    (LANE.q_cos_eighth, LANE.cos_eighth), (LANE.q_sin_eighth, LANE.sin_eighth),
+    (LANE.q_wn2, LANE.wn2), (LANE.q_cm, LANE.cm), (LANE.q_thm, LANE.thm),
+    (LANE.q_khm, LANE.khm), (LANE.q_gap, LANE.gap), (LANE.q_ch, LANE.ch),
+    (LANE.q_irc, LANE.irc), (LANE.q_thc, LANE.thc),
+)
+
+
 @njit(**JIT)
 def quarter_steps(L, lanes):
     """Redo the trial step of the marked lanes (LANE.need) that take quarter steps (_quarter)
@@ -350,32 +355,9 @@ def quarter_steps(L, lanes):
         if L[LANE.need + j] == 0.0 or not _quarter(L, j):
             continue
         L[LANE.q_lane + n] = j
-        L[LANE.q_x + n], L[LANE.q_v + n], L[LANE.q_voltage + n] = (
-            L[LANE.x + j],
-            L[LANE.v + j],
-            L[LANE.voltage + j],
-        )
-        L[LANE.q_sin + n], L[LANE.q_cos + n], L[LANE.q_amplitude + n] = (
-            L[LANE.sin + j],
-            L[LANE.cos + j],
-            L[LANE.amplitude + j],
-        )
-        L[LANE.q_cos_eighth + n], L[LANE.q_sin_eighth + n], L[LANE.q_dt + n] = (
-            L[LANE.cos_eighth + j],
-            L[LANE.sin_eighth + j],
-            0.25 * L[LANE.h + j],
-        )
-        L[LANE.q_wn2 + n], L[LANE.q_cm + n], L[LANE.q_thm + n] = (
-            L[LANE.wn2 + j],
-            L[LANE.cm + j],
-            L[LANE.thm + j],
-        )
-        L[LANE.q_khm + n], L[LANE.q_gap + n], L[LANE.q_ch + n] = (
-            L[LANE.khm + j],
-            L[LANE.gap + j],
-            L[LANE.ch + j],
-        )
-        L[LANE.q_irc + n], L[LANE.q_thc + n] = L[LANE.irc + j], L[LANE.thc + j]
+        for packed, row in _QUARTER_ROWS:
+            L[packed + n] = L[row + j]
+        L[LANE.q_dt + n] = 0.25 * L[LANE.h + j]
         n += 1
     if n == 0:
         return
@@ -447,13 +429,8 @@ def _quarter_block(L, b):
 def finish_step(L, j, it):
     """Redo and finish the step of lane ``j`` that the lane loop marked (see lane_steps)
     in iteration ``it``; whether it ends the lane's forcing period."""
-    x, v, V, on, ch = (
-        L[LANE.x + j],
-        L[LANE.v + j],
-        L[LANE.voltage + j],
-        L[LANE.on + j],
-        L[LANE.ch + j],
-    )
+    x, v, V, s0, c0 = _state(L, j)  # the forcing phase at the start of the step
+    on, ch = L[LANE.on + j], L[LANE.ch + j]
     xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
     A, wn2, cm, thm, khm = (
         L[LANE.amplitude + j],
@@ -470,7 +447,6 @@ def finish_step(L, j, it):
         L[LANE.latch + j],
     )
     n_steps = L[LANE.steps + j]
-    s0, c0 = L[LANE.sin + j], L[LANE.cos + j]  # the forcing phase at the start of the step
     fine = L[LANE.fine + j]
     dV = voltage_rate(V, v, irc, thc)  # at the start of the step [V/s]
     # int V^2 dt over the trial step as the lane loop takes it (see _commit_steps), unless
