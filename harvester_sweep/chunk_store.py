@@ -1,18 +1,37 @@
 """Where a sweep keeps its finished chunks: in memory, or in ``OUT.nc.partial/`` beside the
 output file, so that a killed run loses no finished work and ``--resume`` computes only
 the chunks still missing.
+
+On disk every chunk file has a seal beside it (``chunk_NNNNNN.json``: the SHA-256 of the
+chunk file and of the sweep), written after the chunk: a resumed run uses only chunks whose
+seal matches, and computes the others again (a file cut short by a full disk or a bad copy).
+A lock file beside the output (``.OUT.nc.lock``) keeps a second run off the same output; the
+operating system releases it when its run ends, however it ends.
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
 import os
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
+from filelock import FileLock, Timeout
 
 from .parameters import ParameterError
+
+
+class StoreError(ParameterError):
+    """The output or its partial result cannot be written (a folder without write
+    permission, a full disk); the finished chunks are kept."""
+
+
+class DamagedChunkWarning(UserWarning):
+    """A kept chunk failed its check and is computed again."""
 
 
 class MemoryStore:
@@ -20,6 +39,12 @@ class MemoryStore:
 
     def __init__(self):
         self.chunks = {}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
 
     def has(self, chunk):
         return chunk in self.chunks
@@ -32,10 +57,12 @@ class MemoryStore:
 
 
 class ChunkStore:
-    """Chunk results saved as ``<output>.partial/chunk_NNNNNN.npz`` beside a manifest.
+    """Chunk results saved as ``<output>.partial/chunk_NNNNNN.npz``, each sealed, beside a
+    manifest.
 
-    The manifest holds the SHA-256 of the sweep; a partial result is resumed only by the
-    very same sweep, since its chunks would not fit another grid or chunking.
+    The manifest and every seal hold the SHA-256 of the sweep; a partial result is resumed
+    only by the very same sweep, since its chunks would not fit another grid or chunking.
+    Use it as a context manager: it holds the output's lock until the block ends.
     """
 
     def __init__(self, output, spec, resume: bool):
@@ -44,48 +71,157 @@ class ChunkStore:
             raise ParameterError(f"{output}: the folder {output.parent} does not exist")
         self.dir = output.with_name(output.name + ".partial")
         self.spec = spec
-        manifest = self.dir / "manifest.json"
-        if self.dir.exists():
-            if not resume:
-                raise ParameterError(
-                    f"{self.dir} holds the partial result of an interrupted run: resume it "
-                    "(--resume) or delete it to start over")
-            try:
-                digest = json.loads(manifest.read_text())["sweep_sha256"]
-            except (OSError, ValueError, KeyError):
-                digest = None
-            if digest != spec.digest():
-                raise ParameterError(
-                    f"{self.dir} holds a partial result of another sweep (its grid, "
-                    "parameters, options, package version or kernel differ): it cannot be "
-                    "resumed with this one; delete it to start over")
+        self.digest = spec.digest()
+        self._lock = FileLock(output.with_name(f".{output.name}.lock"), timeout=0)
+        try:
+            self._lock.acquire()
+        except Timeout:
+            raise ParameterError(
+                f"{output}: another run is writing this output now (it holds "
+                f"{self._lock.lock_file}): wait for it to end, or give another --output"
+            ) from None
+        except OSError as error:
+            raise StoreError(f"{output}: cannot write in the folder {output.parent} "
+                             f"({error.strerror}): give an --output where you can write") from None
+        try:
+            self._check_partial(resume)
+        except BaseException:
+            self._lock.release()
+            raise
+
+    def _check_partial(self, resume: bool) -> None:
+        if not self.dir.exists():
+            return
+        if not resume:
+            raise ParameterError(
+                f"{self.dir} holds the partial result of an interrupted run: resume it "
+                "(--resume) or delete it to start over")
+        try:
+            digest = json.loads((self.dir / "manifest.json").read_text())["sweep_sha256"]
+        except (OSError, ValueError, KeyError, TypeError):
+            raise ParameterError(
+                f"{self.dir}/manifest.json cannot be read (damaged, or not made by "
+                "harvester-sweep): the partial result cannot be checked; delete the folder "
+                "to start over") from None
+        if digest != self.digest:
+            raise ParameterError(
+                f"{self.dir} holds a partial result of another sweep (its grid, "
+                "parameters, options, package version or kernel differ): it cannot be "
+                "resumed with this one; delete it to start over")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self._lock.release()
+        return False
 
     def _path(self, chunk: int) -> Path:
         return self.dir / f"chunk_{chunk:06d}.npz"
 
-    def has(self, chunk):
-        return self._path(chunk).exists()
+    def _seal(self, chunk: int) -> Path:
+        return self.dir / f"chunk_{chunk:06d}.json"
 
-    def save(self, chunk, result):
-        if not self.dir.exists():  # made with the first chunk: a run that fails earlier leaves none
-            self.dir.mkdir()
-            manifest = {"sweep_sha256": self.spec.digest(), "n_chunks": self.spec.n_chunks,
-                        "sweep": json.loads(self.spec.canonical())}
-            _write_atomic(self.dir / "manifest.json",
-                          lambda handle: handle.write(json.dumps(manifest, indent=1).encode()))
-        _write_atomic(self._path(chunk), lambda handle: np.savez(handle, **result))
+    def has(self, chunk) -> bool:
+        """True when chunk ``chunk`` is on disk and passes its check."""
+        return self._verified(chunk) is not None
 
-    def load(self, chunk):
-        with np.load(self._path(chunk)) as data:
-            return {name: data[name] for name in data.files}
+    def save(self, chunk, result) -> None:
+        """Write chunk ``chunk``, then its seal.
 
-    def remove(self):
+        Raises
+        ------
+        StoreError
+            When the disk refuses (full, no permission); the chunks already sealed are kept.
+        """
+        path = self.dir
+        try:
+            if not self.dir.exists():  # made with the first chunk: a run that fails earlier
+                self.dir.mkdir()       # leaves none
+                manifest = {"sweep_sha256": self.digest, "n_chunks": self.spec.n_chunks,
+                            "sweep": json.loads(self.spec.canonical())}
+                path = self.dir / "manifest.json"
+                _write_atomic(path, json.dumps(manifest, indent=1).encode())
+            buffer = io.BytesIO()
+            np.savez(buffer, **result)
+            data = buffer.getvalue()
+            path = self._path(chunk)
+            _write_atomic(path, data)
+            seal = {"sweep_sha256": self.digest, "chunk": chunk, "bytes": len(data),
+                    "sha256": hashlib.sha256(data).hexdigest()}
+            path = self._seal(chunk)
+            _write_atomic(path, json.dumps(seal).encode())
+        except OSError as error:
+            kept = len(list(self.dir.glob("chunk_*.json"))) if self.dir.is_dir() else 0
+            if not kept:  # (nothing to resume: an empty partial result would be in the way)
+                self.remove()
+            raise StoreError(
+                f"cannot write {path}: {error.strerror}; "
+                + (f"the {kept} finished chunks are kept in {self.dir}: make room and run "
+                   "the same command with --resume" if kept else "no chunk was finished")
+            ) from None
+
+    def load(self, chunk) -> dict | None:
+        """Chunk ``chunk``'s arrays, or None when it is missing or fails its check."""
+        data = self._verified(chunk)
+        if data is None:
+            return None
+        with np.load(io.BytesIO(data)) as arrays:
+            return {name: arrays[name] for name in arrays.files}
+
+    def _verified(self, chunk: int) -> bytes | None:
+        """The bytes of chunk ``chunk`` if its seal vouches for them; a damaged chunk is
+        deleted (with a DamagedChunkWarning) so that it is computed again."""
+        path, seal = self._path(chunk), self._seal(chunk)
+        if not path.exists() and not seal.exists():
+            return None
+        try:
+            return _sealed_bytes(path, seal, self.digest)
+        except _Damage as damage:
+            warnings.warn(f"{path} is damaged: {damage}; computing chunk {chunk} again",
+                          DamagedChunkWarning, stacklevel=3)
+        for stale in (path, seal):
+            stale.unlink(missing_ok=True)
+        return None
+
+    def remove(self) -> None:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
-def _write_atomic(path: Path, write) -> None:
-    """Write a file under a temporary name, then rename it: a killed run leaves no half file."""
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write a file under a temporary name, then rename it: a killed run leaves no half file
+    under the real name (and a failed write leaves no temporary one)."""
     tmp = path.with_name(f".{path.name}.tmp")
-    with tmp.open("wb") as handle:
-        write(handle)
-    os.replace(tmp, path)
+    try:
+        with tmp.open("wb") as handle:
+            handle.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+class _Damage(Exception):
+    """Why a chunk file fails its check."""
+
+
+def _sealed_bytes(path: Path, seal: Path, digest: str) -> bytes:
+    """The bytes of chunk file ``path`` when its ``seal`` vouches for them and names the
+    sweep of SHA-256 ``digest``; else raise _Damage saying what is wrong."""
+    if not seal.exists():
+        raise _Damage("it has no seal (the run stopped before sealing it)")
+    try:
+        expected = json.loads(seal.read_text())
+        written, checksum, sweep = expected["bytes"], expected["sha256"], expected["sweep_sha256"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise _Damage(f"its seal {seal.name} cannot be read") from None
+    if sweep != digest:
+        raise _Damage("its seal belongs to another sweep")
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise _Damage(f"it cannot be read ({error.strerror})") from None
+    if hashlib.sha256(data).hexdigest() != checksum:
+        raise _Damage(f"its {len(data)} bytes do not match the checksum of the {written} "
+                      "bytes written")
+    return data

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 
 from .parameters import PARAMETERS, PRESETS, ParameterError, parse_assignment, resolve_parameters
 
@@ -62,6 +63,17 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _main(args)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr, without the source line a script's user cannot act on."""
+    print(f"harvester-sweep: warning: {message}", file=sys.stderr)
+
+
+def _main(args) -> int:
     try:
         if args.command == "parameters":
             return _print_parameters()

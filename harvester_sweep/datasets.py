@@ -132,8 +132,13 @@ def run_attributes(parameters: dict, notes) -> dict:
 
 
 def write_netcdf(ds: xr.Dataset, path) -> None:
-    """Write ``ds`` to ``path`` atomically: to a temporary name beside it, then renamed."""
+    """Write ``ds`` to ``path`` atomically: to a temporary name beside it, then renamed (a
+    failed write leaves neither)."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.part")
-    ds.to_netcdf(tmp, engine="netcdf4")
-    os.replace(tmp, path)
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise

@@ -3,8 +3,8 @@
 Work is split into lines and chunks (:mod:`harvester_sweep.chunks`): a chunk is a run of
 whole lines, which go through one call of the engine; numba's threads share them. With an
 output file, each finished chunk is saved in ``OUT.nc.partial/`` at once
-(:mod:`harvester_sweep.chunk_store`); a resumed run computes only the missing chunks. The
-netCDF file is written aside and renamed when complete.
+(:mod:`harvester_sweep.chunk_store`), sealed with its checksum; a resumed run computes only
+the chunks missing or damaged. The netCDF file is written aside and renamed when complete.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import sys
 
 from tqdm import tqdm
 
-from .chunk_store import ChunkStore, MemoryStore
+from .chunk_store import ChunkStore, MemoryStore, StoreError
 from .chunks import chunk_points, compute_chunk
 from .parameters import ParameterError
 from .sweep_file import load_sweep
@@ -50,7 +50,11 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     Raises
     ------
     ParameterError
-        Before any integration, for a bad sweep or a partial result of another sweep.
+        Before any integration, for a bad sweep, a partial result of another sweep, or an
+        output another run is writing.
+    StoreError
+        (a ParameterError) When the output or a chunk cannot be written (no permission, a
+        full disk); the finished chunks are kept for ``resume``.
     """
     spec = load_sweep(sweep)
     if workers is not None and scheduler is not None:
@@ -58,22 +62,46 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     if workers is not None and workers < 1:
         raise ParameterError(f"workers = {workers!r}: must be an integer >= 1")
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
-    todo = [chunk for chunk in range(spec.n_chunks) if not store.has(chunk)]
-    done = spec.n_points - sum(chunk_points(spec, chunk) for chunk in todo)
-    with tqdm(total=spec.n_points, initial=done, unit="pt", desc="sweep", smoothing=0.1,
-              disable=not progress or not sys.stderr.isatty()) as bar:
-        if workers is None and scheduler is None:
-            for chunk in todo:
-                store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update))
-        else:
-            from .cluster import run_on_dask
+    with store:  # (holds the output's lock until the file is written)
+        todo = [chunk for chunk in range(spec.n_chunks) if not store.has(chunk)]
+        done = spec.n_points - sum(chunk_points(spec, chunk) for chunk in todo)
+        with tqdm(total=spec.n_points, initial=done, unit="pt", desc="sweep", smoothing=0.1,
+                  disable=not progress or not sys.stderr.isatty()) as bar:
 
-            run_on_dask(spec, todo, store, bar, workers, scheduler)
-    # (imported here: the command line starts faster without xarray)
-    from .datasets import sweep_dataset, write_netcdf
+            def compute(chunks):
+                if workers is None and scheduler is None:
+                    for chunk in chunks:
+                        store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update))
+                else:
+                    from .cluster import run_on_dask
 
-    ds = sweep_dataset(spec, [store.load(chunk) for chunk in range(spec.n_chunks)])
-    if output is not None:
-        write_netcdf(ds, output)
-        store.remove()
+                    run_on_dask(spec, chunks, store, bar, workers, scheduler)
+
+            compute(todo)
+            results = [_load(store, chunk, compute) for chunk in range(spec.n_chunks)]
+        # (imported here: the command line starts faster without xarray)
+        from .datasets import sweep_dataset, write_netcdf
+
+        ds = sweep_dataset(spec, results)
+        if output is not None:
+            try:
+                write_netcdf(ds, output)
+            except (OSError, RuntimeError) as error:  # (netCDF4 reports HDF5's as RuntimeError)
+                raise StoreError(
+                    f"cannot write {output}: {getattr(error, 'strerror', None) or error}; the "
+                    f"finished chunks are kept in {store.dir}: make room and run the same "
+                    "command with --resume") from None
+            store.remove()
     return ds
+
+
+def _load(store, chunk: int, compute) -> dict:
+    """A finished chunk's arrays; one damaged since the run began is computed again, once."""
+    result = store.load(chunk)
+    if result is None:
+        compute([chunk])
+        result = store.load(chunk)
+        if result is None:
+            raise StoreError(f"chunk {chunk} fails its check right after it was written: "
+                             f"the disk under {store.dir} does not keep what is written to it")
+    return result
