@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+
+import numpy as np
 
 from . import timescales
 from .contact import CONTACT_LAWS, IMPACT_VELOCITY_MODES
@@ -33,8 +36,9 @@ class Parameter:
     """One model or run parameter.
 
     ``low``/``high`` bound the value (``None`` for unbounded); ``low_open`` and
-    ``high_open`` make a bound exclusive. ``kind`` is ``"float"``, ``"int"`` or
-    ``"choice"`` (then ``choices`` lists the allowed strings).
+    ``high_open`` make a bound exclusive. ``kind`` is ``"float"``, ``"int"``, ``"bool"`` or
+    ``"choice"`` (then ``choices`` lists the allowed strings). ``optional``: ``None`` means
+    unset.
     """
 
     name: str
@@ -63,27 +67,39 @@ class Parameter:
         return f"{what} in {left}{lo}, {hi}{right}"
 
     def check(self, value):
-        """Return ``value`` converted to this parameter's type, or raise ParameterError."""
+        """Return ``value`` converted to this parameter's type, or raise ParameterError.
+
+        A numeric parameter takes a real number (Python's or numpy's) in its unit, never a
+        bool, a string, a date or a container: TOML's ``mass = true`` is not 1 kg, and text
+        from the command line is converted by :func:`parse_assignment` first. A bool
+        parameter takes a boolean or the command line's words (true/false, yes/no, 1/0), not
+        a number. A choice parameter takes one of its strings.
+        """
         if self.optional and value is None:
             return None
         unit = f" [{'-' if self.unit == '1' else self.unit}]"
         if self.kind == "bool":
-            text = str(value).strip().lower()
+            if isinstance(value, (bool, np.bool_)):
+                return bool(value)
+            text = value.strip().lower() if isinstance(value, str) else None
             if text in ("true", "1", "yes", "1.0"):
                 return True
             if text in ("false", "0", "no", "0.0"):
                 return False
-            raise ParameterError(f"{self.name}{unit} = {value!r}: must be true or false")
+            raise ParameterError(f"{self.name}{unit} = {value_text(value)}: must be true or false")
         if self.kind == "choice":
-            if value not in self.choices:
-                raise ParameterError(f"{self.name}{unit} = {value!r}: must be {self.range_text()}")
-            return value
+            # (a string first: a list or table is refused without being hashed or compared)
+            if not isinstance(value, str) or value not in self.choices:
+                raise ParameterError(
+                    f"{self.name}{unit} = {value_text(value)}: must be {self.range_text()}")
+            return str(value)
+        if not is_number(value):
+            raise ParameterError(f"{self.name}{unit} = {value_text(value)} is not a number: "
+                                 f"must be {self.range_text()}")
         try:
             number = float(value)
-        except (TypeError, ValueError):
-            raise ParameterError(
-                f"{self.name}{unit} = {value!r} is not a number: must be {self.range_text()}"
-            ) from None
+        except OverflowError:  # an integer beyond a double's range (tomllib reads any size)
+            number = math.inf
         bad = not math.isfinite(number)
         if self.low is not None:
             bad |= number < self.low or (self.low_open and number == self.low)
@@ -92,8 +108,23 @@ class Parameter:
         if self.kind == "int":
             bad |= not number.is_integer()
         if bad:
-            raise ParameterError(f"{self.name}{unit} = {value!r}: must be {self.range_text()}")
+            raise ParameterError(
+                f"{self.name}{unit} = {value_text(value)}: must be {self.range_text()}")
         return int(number) if self.kind == "int" else number
+
+
+def is_number(value) -> bool:
+    """A real number (Python's or numpy's), not a bool: bool is an int to Python
+    (float(True) == 1.0), and TOML's ``true`` is not 1."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def value_text(value) -> str:
+    """repr(value) for a message, or a description where Python refuses to print it."""
+    try:
+        return repr(value)
+    except ValueError:  # an integer of over 4300 digits (sys.get_int_max_str_digits)
+        return "an integer too long to print"
 
 
 _P = Parameter
@@ -235,15 +266,14 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
     Raises
     ------
     ParameterError
-        For an unknown preset or parameter name, or a value out of its range.
+        For an unknown preset or parameter name, a value of the wrong type or out of its
+        range, or values whose time scales overflow a double.
     """
-    if preset is not None and preset not in PRESETS:
-        raise ParameterError(f"preset {preset!r} is unknown: must be one of {', '.join(PRESETS)}")
-    for name in overrides:
-        if name not in PARAMETERS:
-            raise ParameterError(
-                f"unknown parameter {name!r}: known parameters are {', '.join(PARAMETERS)}"
-            )
+    # (a string first: `in` would hash a list or table from a sweep file, a TypeError)
+    if preset is not None and (not isinstance(preset, str) or preset not in PRESETS):
+        raise ParameterError(
+            f"preset {value_text(preset)} is unknown: must be one of {', '.join(PRESETS)}")
+    check_names(overrides)
     if overrides.get("stop_mass") is not None:
         if overrides.get("hertz_stiffness") is not None:
             raise ParameterError(
@@ -253,12 +283,33 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
     checked = dict(_checked_preset(preset or "paper"))
     for name, value in overrides.items():
         checked[name] = _check(name, value)
-    if checked["stop_mass"] is not None:
-        checked["hertz_stiffness"] = hertz_stiffness_from_bodies(
-            checked["mass"], checked["tip_material"], checked["stop_mass"], checked["stop_material"]
-        )
-    _check_step(checked)
+    try:
+        if checked["stop_mass"] is not None:
+            checked["hertz_stiffness"] = hertz_stiffness_from_bodies(
+                checked["mass"], checked["tip_material"], checked["stop_mass"],
+                checked["stop_material"])
+        _check_step(checked)
+    except ParameterError:
+        raise
+    except (ArithmeticError, ValueError) as error:
+        # Values each in range can still overflow together (resistance 1e300 Ohm squares
+        # to inf in the time scales; R C_p underflows to 0): float arithmetic raises.
+        given = ", ".join(f"{name} = {value_text(value)}" for name, value in overrides.items())
+        raise ParameterError(
+            f"the time scales of {given or f'preset {preset}'} are beyond double precision "
+            f"({type(error).__name__}): give values of physical magnitude in SI units"
+        ) from None
     return checked
+
+
+def check_names(names) -> None:
+    """Raise ParameterError for the first of ``names`` that is not in :data:`PARAMETERS`."""
+    for name in names:
+        if name not in PARAMETERS:
+            raise ParameterError(
+                f"unknown parameter {value_text(name)}: known parameters are "
+                + ", ".join(PARAMETERS)
+            )
 
 
 def _checked_preset(preset: str) -> dict:
@@ -287,7 +338,8 @@ def _check(name: str, value):
 @functools.lru_cache(maxsize=4096)
 def _check_remembered(name: str, kind: type, value):
     """PARAMETERS[name].check(value); ``kind`` is type(value), part of the key only, so that
-    1, 1.0 and True (equal as keys) are checked each as itself."""
+    1, 1.0, True and numpy's 1 (equal as keys) are checked each as itself: mass = True is
+    refused after mass = 1 was taken, locate_switches = 1 after locate_switches = True."""
     return PARAMETERS[name].check(value)
 
 
@@ -345,10 +397,7 @@ def parse_assignment(text: str) -> tuple[str, object]:
     name = name.strip()
     if not sep or not name:
         raise ParameterError(f"--set {text!r}: expected NAME=VALUE, e.g. --set gap=2e-6")
-    if name not in PARAMETERS:
-        raise ParameterError(
-            f"unknown parameter {name!r}: known parameters are {', '.join(PARAMETERS)}"
-        )
+    check_names([name])
     raw = raw.strip()
     spec = PARAMETERS[name]
     if spec.kind in ("choice", "bool"):

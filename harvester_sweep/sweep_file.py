@@ -36,7 +36,14 @@ import numpy as np
 
 from ._engine import SOURCE_DIGEST
 from .outputs import ENGINE_METRICS
-from .parameters import PARAMETERS, ParameterError, resolve_parameters
+from .parameters import (
+    PARAMETERS,
+    ParameterError,
+    check_names,
+    is_number,
+    resolve_parameters,
+    value_text,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -62,6 +69,10 @@ _SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size", "error_estimate
 ERROR_ESTIMATES = ("sample", "all", "none")
 ERROR_SAMPLE_POINTS = 64  # points given an error estimate by default
 _RANGE_KEYS = ("start", "stop", "num", "scale")
+#: Most values on one grid axis: a range's ``num`` is refused beyond it before numpy
+#: allocates the axis (num = 1e12 asked for 7 TiB), and each value is checked in Python
+#: (~1 us). At ~1 ms a point, 1e7 points are hours on a machine.
+MAX_AXIS_POINTS = 10**7
 
 
 @dataclass(frozen=True)
@@ -190,8 +201,10 @@ def load_sweep(source) -> SweepSpec:
     Raises
     ------
     ParameterError
-        For a missing or unreadable file, an unknown key, an empty, non-finite or
-        out-of-range grid, or options that contradict each other; the message names the key.
+        For a missing or unreadable file, an unknown key, a value of the wrong type (a TOML
+        boolean, string, date, array or table where a number is due, and so on), an empty,
+        non-finite or out-of-range grid, or options that contradict each other; the message
+        names the key. No other exception comes from the file's content.
     """
     if isinstance(source, SweepSpec):
         return source
@@ -202,7 +215,8 @@ def load_sweep(source) -> SweepSpec:
                 source = tomllib.load(handle)
         except OSError as error:
             raise ParameterError(f"{path}: cannot read the sweep file ({error.strerror})") from None
-        except tomllib.TOMLDecodeError as error:
+        except ValueError as error:  # TOMLDecodeError, bytes not UTF-8, an integer of
+            # over 4300 digits (Python refuses to convert it)
             raise ParameterError(f"{path}: not valid TOML: {error}") from None
     if not isinstance(source, dict):
         raise ParameterError("a sweep is a TOML file path or a dict with keys "
@@ -210,7 +224,8 @@ def load_sweep(source) -> SweepSpec:
     _unknown(source, _TOP_KEYS, "")
     preset = source.get("preset", "paper")
     fixed = dict(_table(source, "parameters"))
-    base = resolve_parameters(preset, **fixed)  # names unknown parameters and bad values
+    check_names(fixed)  # (before the call: `preset` among them would be a TypeError)
+    base = resolve_parameters(preset, **fixed)  # bad values, named
     grid, spacing = {}, {}
     for name, entry in _table(source, "grid").items():
         grid[name], spacing[name] = _axis(name, entry, fixed)
@@ -231,7 +246,7 @@ def load_sweep(source) -> SweepSpec:
     metrics = tuple(n for n in METRIC_OUTPUTS if n in outputs or (samples and n == "orbit_period"))
     error_estimate = options.get("error_estimate", "sample")
     if error_estimate not in ERROR_ESTIMATES:
-        raise ParameterError(f"sweep.error_estimate = {error_estimate!r}: must be one of "
+        raise ParameterError(f"sweep.error_estimate = {value_text(error_estimate)}: must be one of "
                              + ", ".join(f'"{e}"' for e in ERROR_ESTIMATES))
     line_length = len(grid["frequency"]) if directions else 1
     chunk_size = _integer(options, "chunk_size", max(
@@ -250,7 +265,14 @@ def load_sweep(source) -> SweepSpec:
 def _unknown(table: dict, known, prefix: str) -> None:
     for key in table:
         if key not in known:
-            raise ParameterError(f"{prefix}{key}: unknown key; known keys are {', '.join(known)}")
+            raise ParameterError(f"{prefix}{_key(key)}: unknown key; known keys are "
+                                 + ", ".join(known))
+
+
+def _key(key) -> str:
+    """A key as written in a message: quoted when it is not plain text (TOML's quoted keys
+    may hold a newline, which would break the one-line message)."""
+    return key if isinstance(key, str) and key.isprintable() else value_text(key)
 
 
 def _table(source: dict, key: str) -> dict:
@@ -262,7 +284,7 @@ def _table(source: dict, key: str) -> dict:
 
 def _axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
     """Values [SI] and spacing of one grid axis, each value checked against its range."""
-    key = f"grid.{name}"
+    key = f"grid.{_key(name)}"
     if name not in PARAMETERS:
         raise ParameterError(f"{key}: unknown parameter; known parameters are "
                              + ", ".join(PARAMETERS))
@@ -273,20 +295,22 @@ def _axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
     if name in fixed:
         raise ParameterError(f"{key}: {name} is also set in [parameters]; give it in one place")
     if isinstance(entry, dict):
-        values, spacing = _range(key, entry), entry.get("scale", "linear")
+        values, spacing = _range(key, entry).tolist(), entry.get("scale", "linear")
     elif isinstance(entry, (list, tuple, np.ndarray)):
-        values, spacing = list(np.asarray(entry, dtype=object).ravel()), "list"
+        # (a TOML array as it is: a nested one is refused below, not flattened)
+        values = list(entry) if isinstance(entry, (list, tuple)) else np.ravel(entry).tolist()
+        spacing = "list"
         if not values:
             raise ParameterError(f"{key}: the list of values is empty")
+        if len(values) > MAX_AXIS_POINTS:
+            raise ParameterError(f"{key}: {len(values)} values, more than the "
+                                 f"{MAX_AXIS_POINTS:.0e} an axis may hold")
     else:
         raise ParameterError(f"{key}: give a list of values or a table "
                              "{ start, stop, num, scale = \"linear\" | \"log\" }")
-    unit = f" [{'-' if parameter.unit == '1' else parameter.unit}]"
     checked = []
     for value in values:
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            raise ParameterError(f"{key}{unit} = {value!r} is not a number")
-        try:
+        try:  # (check refuses bools, strings, dates, arrays and tables: not numbers)
             checked.append(parameter.check(value))
         except ParameterError as error:
             raise ParameterError(f"grid.{error}") from None
@@ -300,22 +324,33 @@ def _range(key: str, entry: dict) -> np.ndarray:
         if part not in entry:
             raise ParameterError(f"{key}.{part}: missing; a range is "
                                  "{ start, stop, num, scale = \"linear\" | \"log\" }")
-    start, stop, num = entry["start"], entry["stop"], entry["num"]
-    for part, value in (("start", start), ("stop", stop)):
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                or not math.isfinite(value):
-            raise ParameterError(f"{key}.{part} = {value!r}: must be a finite number")
-    if isinstance(num, bool) or not isinstance(num, numbers.Integral) or num < 1:
-        raise ParameterError(f"{key}.num = {num!r}: must be an integer >= 1")
+    ends = []
+    for part in ("start", "stop"):
+        value = entry[part]
+        try:  # (as a float: numpy cannot take an integer beyond int64 as an end)
+            number = float(value) if is_number(value) else math.nan
+        except OverflowError:  # an integer beyond a double's range (tomllib reads any size)
+            number = math.inf
+        if not math.isfinite(number):
+            raise ParameterError(f"{key}.{part} = {value_text(value)}: must be a finite number")
+        ends.append(number)
+    start, stop = ends
+    num = entry["num"]
+    if not is_number(num) or not isinstance(num, numbers.Integral) \
+            or not 1 <= num <= MAX_AXIS_POINTS:
+        raise ParameterError(f"{key}.num = {value_text(num)}: must be an integer in "
+                             f"[1, {MAX_AXIS_POINTS:.0e}]")
+    num = int(num)
     scale = entry.get("scale", "linear")
     if scale == "linear":
-        return np.linspace(start, stop, num)
+        with np.errstate(over="ignore", invalid="ignore"):  # (stop - start beyond a double:
+            return np.linspace(start, stop, num)  # inf and nan, refused by the check)
     if scale == "log":
         if start <= 0 or stop <= 0:
             raise ParameterError(f"{key}: scale = \"log\" needs start > 0 and stop > 0 "
-                                 f"(got start = {start!r}, stop = {stop!r})")
+                                 f"(got start = {value_text(start)}, stop = {value_text(stop)})")
         return np.geomspace(start, stop, num)
-    raise ParameterError(f"{key}.scale = {scale!r}: must be \"linear\" or \"log\"")
+    raise ParameterError(f"{key}.scale = {value_text(scale)}: must be \"linear\" or \"log\"")
 
 
 def _directions(options: dict, grid: dict) -> tuple:
@@ -335,7 +370,7 @@ def _string_list(options: dict, key: str, allowed, default) -> list:
                              + ", ".join(f'"{a}"' for a in allowed))
     for item in value:
         if item not in allowed:
-            raise ParameterError(f"sweep.{key}: {item!r} is unknown; must be among "
+            raise ParameterError(f"sweep.{key}: {value_text(item)} is unknown; must be among "
                                  + ", ".join(f'"{a}"' for a in allowed))
     return value
 
@@ -343,7 +378,7 @@ def _string_list(options: dict, key: str, allowed, default) -> list:
 def _integer(options: dict, key: str, default: int) -> int:
     value = options.get(key, default)
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ParameterError(f"sweep.{key} = {value!r}: must be an integer >= 1")
+        raise ParameterError(f"sweep.{key} = {value_text(value)}: must be an integer >= 1")
     return value
 
 
