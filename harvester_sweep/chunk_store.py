@@ -46,6 +46,9 @@ class MemoryStore:
     def __exit__(self, *exc):
         return False
 
+    def present(self):
+        return sorted(self.chunks)
+
     def has(self, chunk):
         return chunk in self.chunks
 
@@ -121,6 +124,13 @@ class ChunkStore:
 
     def _seal(self, chunk: int) -> Path:
         return self.dir / f"chunk_{chunk:06d}.json"
+
+    def present(self) -> list:
+        """The chunks with a file or a seal on disk, sound or not, in order."""
+        if not self.dir.is_dir():
+            return []
+        return sorted({int(path.stem[len("chunk_"):]) for path in self.dir.glob("chunk_*.*")
+                       if path.stem[len("chunk_"):].isdigit()})
 
     def has(self, chunk) -> bool:
         """True when chunk ``chunk`` is on disk and passes its check."""

@@ -46,7 +46,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--output", required=True, metavar="OUT.nc", help="netCDF file to write")
     run.add_argument("--resume", action="store_true",
                      help="finish an interrupted run from the chunks in OUT.nc.partial/")
-    run.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    run.add_argument("--quiet", action="store_true",
+                     help="no estimate, no progress bar and no summary")
+    run.add_argument("--yes", action="store_true",
+                     help="start the sweep even when it is estimated to take more than an hour")
     where = run.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, metavar="N",
                        help="run the chunks on a local dask cluster of N worker processes")
@@ -149,7 +152,8 @@ def _run(args) -> int:
         _announce_compilation()
     try:
         ds = run_sweep(args.sweep_file, args.output, resume=args.resume,
-                       progress=not args.quiet, workers=args.workers, scheduler=args.scheduler)
+                       progress=not args.quiet, workers=args.workers, scheduler=args.scheduler,
+                       yes=args.yes)
     except KeyboardInterrupt:
         print(f"harvester-sweep: interrupted; the finished chunks are kept in "
               f"{args.output}.partial/: run the same command with --resume to finish",

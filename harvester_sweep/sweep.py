@@ -9,6 +9,7 @@ the chunks missing or damaged. The netCDF file is written aside and renamed when
 
 from __future__ import annotations
 
+import os
 import sys
 
 from tqdm import tqdm
@@ -16,11 +17,12 @@ from tqdm import tqdm
 from .chunk_store import ChunkStore, MemoryStore, StoreError
 from .chunks import chunk_points, compute_chunk
 from .parameters import ParameterError
+from .run_estimate import LONG_RUN_SECONDS, estimate
 from .sweep_file import load_sweep
 
 
 def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True,
-              workers: int | None = None, scheduler: str | None = None):
+              workers: int | None = None, scheduler: str | None = None, yes: bool = False):
     """Run a sweep and return its dataset (also written to ``output`` when given).
 
     Parameters
@@ -34,11 +36,15 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         Finish the partial result of an interrupted run of the same sweep. Without it, an
         existing partial result is refused rather than overwritten.
     progress : bool
-        Show a progress bar on stderr (only when stderr is a terminal).
+        Print the sweep's size and estimated run time on stderr before it starts, and show a
+        progress bar there (only when stderr is a terminal).
     workers : int, optional
         Run the chunks on a dask LocalCluster of this many worker processes.
     scheduler : str, optional
         Run the chunks on the running dask.distributed scheduler at this address.
+    yes : bool
+        Start a sweep estimated to take longer than run_estimate.LONG_RUN_SECONDS (1 h);
+        without it such a sweep is refused before any work (the command line's ``--yes``).
 
     Returns
     -------
@@ -50,8 +56,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     Raises
     ------
     ParameterError
-        Before any integration, for a bad sweep, a partial result of another sweep, or an
-        output another run is writing.
+        Before any integration, for a bad sweep, a partial result of another sweep, an
+        output another run is writing, or a long run without ``yes``.
     StoreError
         (a ParameterError) When the output or a chunk cannot be written (no permission, a
         full disk); the finished chunks are kept for ``resume``.
@@ -63,8 +69,18 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         raise ParameterError(f"workers = {workers!r}: must be an integer >= 1")
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
     with store:  # (holds the output's lock until the file is written)
-        todo = [chunk for chunk in range(spec.n_chunks) if not store.has(chunk)]
-        done = spec.n_points - sum(chunk_points(spec, chunk) for chunk in todo)
+        finished = [chunk for chunk in store.present() if store.has(chunk)]
+        remaining = spec.n_points - sum(chunk_points(spec, chunk) for chunk in finished)
+        work = estimate(spec, remaining, _threads(workers, scheduler))
+        if work.long and not yes:
+            raise ParameterError(
+                f"{work.describe()}, beyond {LONG_RUN_SECONDS / 3600:g} h: start it with "
+                "--yes (yes=True in Python), or make the grid coarser")
+        if progress:
+            print(f"harvester-sweep: {work.describe()}", file=sys.stderr, flush=True)
+        finished = set(finished)
+        todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]
+        done = spec.n_points - remaining
         with tqdm(total=spec.n_points, initial=done, unit="pt", desc="sweep", smoothing=0.1,
                   disable=not progress or not sys.stderr.isatty()) as bar:
 
@@ -93,6 +109,18 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
                     "command with --resume") from None
             store.remove()
     return ds
+
+
+def _threads(workers: int | None, scheduler: str | None) -> int:
+    """Threads the sweep will run on: this process's numba threads, a LocalCluster's
+    cores, or 1 for a remote scheduler (its size is not known before connecting)."""
+    if scheduler is not None:
+        return 1
+    if workers is not None:
+        return workers * max(1, (os.cpu_count() or 1) // workers)
+    import numba
+
+    return numba.get_num_threads()
 
 
 def _load(store, chunk: int, compute) -> dict:

@@ -164,6 +164,18 @@ class SweepSpec:
             1, self.n_points // ERROR_SAMPLE_POINTS)
         return np.asarray(flat_index) % stride == 0
 
+    def values_at(self, point: int) -> dict:
+        """Grid values [SI] of point ``point`` (index line * line_length + position along
+        the line, the line in ascending frequency)."""
+        line, position = divmod(point, self.line_length)
+        index = [int(i) for i in np.unravel_index(line, self.line_shape)]
+        if self.continuation:
+            index.pop(0)  # (the direction)
+        values = {a: self.grid[a][i].item() for a, i in zip(self.line_axes, index)}
+        if self.continuation:
+            values["frequency"] = self.grid["frequency"][position].item()
+        return values
+
     def point_parameters(self, values: dict) -> dict:
         """Validated parameters of one point from its grid ``values`` (SI units)."""
         return resolve_parameters(self.preset, **self.fixed, **values)

@@ -1,5 +1,6 @@
-"""Faults around a sweep's files: a damaged partial result, two runs on one output, a full
-disk, a folder that cannot be written. Each ends in one line and keeps finished work."""
+"""Faults around a sweep's files (a damaged partial result, two runs on one output, a full
+disk, a folder that cannot be written) and a sweep too long to start unasked. Each ends in
+one line and keeps finished work."""
 
 from __future__ import annotations
 
@@ -17,7 +18,10 @@ import xarray as xr
 
 from harvester_sweep import chunk_store, cli, datasets, sweep
 from harvester_sweep.chunk_store import DamagedChunkWarning
+from harvester_sweep.parameters import ParameterError
+from harvester_sweep.run_estimate import estimate
 from harvester_sweep.sweep import run_sweep
+from harvester_sweep.sweep_file import load_sweep
 from tests.helpers import assert_same_bits, spec
 
 ROOT = Path(__file__).parents[2]  # subprocesses import this checkout, and share its cache
@@ -235,3 +239,33 @@ def _refuse_writes_in(folder: Path, monkeypatch) -> None:
             return _real(path, *args, **kwargs)
 
         monkeypatch.setattr(os, name, refused)
+
+
+HUGE = """[grid]
+frequency = { start = 100, stop = 300, num = 100000 }
+gap = { start = 0, stop = 1e-5, num = 100000 }
+"""
+
+
+def test_a_sweep_of_months_asks_for_yes_before_any_work(tmp_path):
+    (tmp_path / "huge.toml").write_text(HUGE)
+    out = tmp_path / "huge.nc"
+    run = _cli("run", tmp_path / "huge.toml", "--output", out)
+    _, err = run.communicate(timeout=120)  # (without the check, it runs for months)
+    assert run.returncode == 2 and len(err.splitlines()) == 1, err
+    assert "10,000,000,000 points" in err and " days on " in err and "--yes" in err
+    assert not out.exists() and not (tmp_path / "huge.nc.partial").exists()
+    with pytest.raises(ParameterError, match="yes=True"):
+        run_sweep(tmp_path / "huge.toml", progress=False)
+
+
+def test_the_estimate_counts_the_steps_the_sweep_takes(capsys):
+    # Without the stop a point from rest settles as its slowest linear transient decays to
+    # the tolerance; the engine's own count of periods is the independent measure.
+    grid = {"frequency": [120.0, 150.0, 180.0], "damping_ratio": [0.005, 0.02]}
+    sweep_dict = spec(grid, {"hertz_stiffness": 0.0, "max_periods": 10**6})
+    work = estimate(load_sweep(sweep_dict), 6, threads=1)
+    ds = run_sweep(sweep_dict, progress=True)
+    assert capsys.readouterr().err.startswith("harvester-sweep: 6 points, about ")
+    taken = float(ds["periods_run"].sum()) * 256
+    assert 0.8 < work.steps / taken < 1.25

@@ -1,0 +1,100 @@
+"""How much work a sweep is, said before it starts: points, RK4 steps and a rough run time.
+
+The steps come from the model, not from a trial run: each of a sample of points spread over
+the grid takes the step of its parameters (``steps_per_period``, chosen from its time scales
+when unset) for the periods its slowest transient needs to decay from rest to the settle
+tolerance (at most ``max_periods``). Contact only adds damping, and a point continued from
+its neighbour starts closer to its orbit, so this is rather an upper estimate. The run time
+divides by a typical rate of the lane engine (:data:`SWEEP_STEPS_PER_SECOND`); the progress
+bar's ETA, from the measured rate, takes over once the sweep runs.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import timescales
+
+#: RK4 steps a thread of the lane engine takes per second on a sweep, for estimates only:
+#: the benchmark grids run at 1e8-2.5e8 a thread on AMD Zen 3 (benchmarks/results/), and
+#: Zen 1's 128-bit vector units take about half that.
+SWEEP_STEPS_PER_SECOND = 1e8
+#: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
+LONG_RUN_SECONDS = 3600.0
+#: Points whose parameters are resolved for the estimate, spread evenly over the grid.
+SAMPLE_POINTS = 64
+
+
+@dataclass(frozen=True)
+class RunEstimate:
+    """The work of a sweep.
+
+    Attributes
+    ----------
+    points : int
+        Points of the grid.
+    remaining : int
+        Points still to run (fewer when resuming).
+    steps : float
+        RK4 steps the remaining points are expected to take.
+    threads : int
+        Threads that share the work.
+    """
+
+    points: int
+    remaining: int
+    steps: float
+    threads: int
+
+    @property
+    def seconds(self) -> float:
+        """Expected wall time [s] on ``threads`` threads."""
+        return self.steps / (SWEEP_STEPS_PER_SECOND * self.threads)
+
+    @property
+    def long(self) -> bool:
+        """True when the run is expected to take more than LONG_RUN_SECONDS."""
+        return self.seconds > LONG_RUN_SECONDS
+
+    def describe(self) -> str:
+        """One line: size, steps and time."""
+        todo = "" if self.remaining == self.points else f" ({self.remaining:,} still to run)"
+        return (f"{self.points:,} points{todo}, about {self.steps:.2g} RK4 steps: roughly "
+                f"{duration(self.seconds)} on {self.threads} thread"
+                f"{'s' if self.threads > 1 else ''}")
+
+
+def estimate(spec, remaining: int, threads: int) -> RunEstimate:
+    """The expected work of ``remaining`` points of ``spec`` (a SweepSpec) on ``threads``."""
+    picks = np.unique(np.linspace(0, spec.n_points - 1, min(SAMPLE_POINTS, spec.n_points))
+                      .round().astype(np.int64))
+    per_point = float(np.mean([point_steps(spec.point_parameters(spec.values_at(int(i))))
+                               for i in picks]))
+    return RunEstimate(spec.n_points, remaining, per_point * remaining, max(1, threads))
+
+
+def point_steps(p: dict) -> float:
+    """RK4 steps point ``p`` (validated parameters) is expected to take from rest; 0 for a
+    point refused as too stiff."""
+    if p["steps_per_period"] > p["max_steps_per_period"]:
+        return 0.0
+    rate, _ = timescales.slowest_decay(p)
+    settle = math.log(1.0 / p["settle_tolerance"]) * p["frequency"] / rate if rate > 0 \
+        else math.inf
+    return p["steps_per_period"] * min(p["max_periods"], max(settle, 16.0))
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` [s] in the unit a reader takes in at once: s, min, h, days or years."""
+    for unit, size in (("years", 365.25 * 86400), ("days", 86400), ("h", 3600), ("min", 60)):
+        if seconds >= 2 * size:
+            return f"{_rounded(seconds / size)} {unit}"
+    return f"{_rounded(seconds)} s"
+
+
+def _rounded(value: float) -> str:
+    """Two significant digits, without an exponent below 1e15."""
+    return f"{value:.2g}" if value < 10 or value >= 1e15 else f"{float(f'{value:.2g}'):,.0f}"
