@@ -72,6 +72,8 @@ class ChunkStore:
         output = Path(output)
         if not output.parent.is_dir():
             raise ParameterError(f"{output}: the folder {output.parent} does not exist")
+        if output.is_dir():
+            raise ParameterError(f"{output} is a folder: give --output a file name")
         self.dir = output.with_name(output.name + ".partial")
         self.spec = spec
         self.digest = spec.digest()
@@ -162,14 +164,18 @@ class ChunkStore:
             path = self._seal(chunk)
             _write_atomic(path, json.dumps(seal).encode())
         except OSError as error:
-            kept = len(list(self.dir.glob("chunk_*.json"))) if self.dir.is_dir() else 0
-            if not kept:  # (nothing to resume: an empty partial result would be in the way)
-                self.remove()
-            raise StoreError(
-                f"cannot write {path}: {error.strerror}; "
-                + (f"the {kept} finished chunks are kept in {self.dir}: make room and run "
-                   "the same command with --resume" if kept else "no chunk was finished")
-            ) from None
+            raise self.unwritten(path, error.strerror) from None
+
+    def unwritten(self, path, why: str) -> StoreError:
+        """The error to raise when ``path`` cannot be written (``why``): it says what is
+        kept for --resume, and removes a partial result that holds no finished chunk."""
+        kept = len(list(self.dir.glob("chunk_*.json"))) if self.dir.is_dir() else 0
+        if not kept:  # (nothing to resume: an empty partial result would be in the way)
+            self.remove()
+            return StoreError(f"cannot write {path}: {why}; no chunk was finished")
+        return StoreError(f"cannot write {path}: {why}; the {kept} finished chunks are kept in "
+                          f"{self.dir}: make room (or fix the folder) and run the same "
+                          "command with --resume")
 
     def load(self, chunk) -> dict | None:
         """Chunk ``chunk``'s arrays, or None when it is missing or fails its check."""

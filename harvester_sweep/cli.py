@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import warnings
@@ -131,10 +132,23 @@ def _scene(args) -> int:
               "may be chaotic or need more periods: the metrics are over the last 16 periods",
               file=sys.stderr)
     if args.output:
-        result.to_netcdf(args.output)
+        with _writing(args.output):
+            result.to_netcdf(args.output)
     if args.plot:
-        result.plot(args.plot)
+        with _writing(args.plot):
+            result.plot(args.plot)
     return 0
+
+
+@contextlib.contextmanager
+def _writing(path: str):
+    """Turn a file that cannot be written (no folder, no permission, a full disk) into one
+    line, exit 2."""
+    try:
+        yield
+    except (OSError, RuntimeError) as error:  # (netCDF4 reports HDF5's as RuntimeError)
+        why = getattr(error, "strerror", None) or str(error).splitlines()[0]
+        raise ParameterError(f"cannot write {path}: {why}") from None
 
 
 def _check_suffix(path: str, suffixes: tuple) -> None:
@@ -189,8 +203,9 @@ def _plot(args) -> int:
     try:
         ds = xr.open_dataset(args.dataset)
     except (OSError, ValueError) as error:
-        raise ParameterError(f"{args.dataset}: cannot read it as netCDF ({error})") from None
-    with ds:
+        why = str(error).splitlines()[0]  # (xarray's own runs over several lines)
+        raise ParameterError(f"{args.dataset}: cannot read it as netCDF ({why})") from None
+    with ds, _writing(args.output):
         (plot_scene if "time" in ds.dims else plot_sweep)(ds, args.output)
     return 0
 

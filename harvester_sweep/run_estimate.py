@@ -12,6 +12,7 @@ bar's ETA, from the measured rate, takes over once the sweep runs.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,8 +72,10 @@ def estimate(spec, remaining: int, threads: int) -> RunEstimate:
     """The expected work of ``remaining`` points of ``spec`` (a SweepSpec) on ``threads``."""
     picks = np.unique(np.linspace(0, spec.n_points - 1, min(SAMPLE_POINTS, spec.n_points))
                       .round().astype(np.int64))
-    per_point = float(np.mean([point_steps(spec.point_parameters(spec.values_at(int(i))))
-                               for i in picks]))
+    with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
+        warnings.simplefilter("ignore")
+        per_point = float(np.mean([point_steps(spec.point_parameters(spec.values_at(int(i))))
+                                   for i in picks]))
     return RunEstimate(spec.n_points, remaining, per_point * remaining, max(1, threads))
 
 

@@ -103,10 +103,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
             try:
                 write_netcdf(ds, output)
             except (OSError, RuntimeError) as error:  # (netCDF4 reports HDF5's as RuntimeError)
-                raise StoreError(
-                    f"cannot write {output}: {getattr(error, 'strerror', None) or error}; the "
-                    f"finished chunks are kept in {store.dir}: make room and run the same "
-                    "command with --resume") from None
+                why = getattr(error, "strerror", None) or str(error).splitlines()[0]
+                raise store.unwritten(output, why) from None
             store.remove()
     return ds
 

@@ -269,3 +269,20 @@ def test_the_estimate_counts_the_steps_the_sweep_takes(capsys):
     assert capsys.readouterr().err.startswith("harvester-sweep: 6 points, about ")
     taken = float(ds["periods_run"].sum()) * 256
     assert 0.8 < work.steps / taken < 1.25
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["scene", "--output", "{file}/x.nc"], "cannot write"),     # (a file where a folder is due:
+    (["scene", "--plot", "{file}/x.png"], "cannot write"),      # refused even to root)
+    (["run", "{toml}", "--output", "{folder}"], "is a folder"),
+    (["plot", "{toml}", "--output", "{tmp}/p.png"], "cannot read it as netCDF"),
+])
+def test_files_that_cannot_be_written_or_read_are_one_line(argv, words, tmp_path, capsys):
+    (tmp_path / "fr.toml").write_text(TOML)
+    (tmp_path / "file").write_text("")
+    (tmp_path / "folder.nc").mkdir()
+    names = {"file": tmp_path / "file", "toml": tmp_path / "fr.toml",
+             "folder": tmp_path / "folder.nc", "tmp": tmp_path}
+    assert cli.main([arg.format(**names) for arg in argv]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and words in err[0], err
