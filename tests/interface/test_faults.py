@@ -126,8 +126,9 @@ def _cli(*args, **kwargs) -> subprocess.Popen:
 
 def test_a_second_run_on_the_same_output_is_refused_and_a_killed_run_frees_it(tmp_path):
     run_sweep(SWEEP, progress=False)  # (the engine compiled, so the first run starts at once)
-    # A point with no damping and no stop never settles: it runs out its budget of periods;
-    # the second's is long enough for the second run to start while the first holds the output.
+    # A point with no damping and no stop never settles: it runs out its budget of periods.
+    # The second point's 3e7 periods (~1e9 steps) keep the first run on the output while
+    # the second run starts.
     (tmp_path / "slow.toml").write_text(
         "[parameters]\nsteps_per_period = 32\ndamping_ratio = 0\ncoupling = 0\n"
         "hertz_stiffness = 0\n[grid]\nmax_periods = [1000, 30000000]\n"
