@@ -7,6 +7,7 @@ import contextlib
 import json
 import sys
 import warnings
+from pathlib import Path
 
 from .parameters import PARAMETERS, PRESETS, ParameterError, parse_assignment, resolve_parameters
 
@@ -103,9 +104,9 @@ def _scene(args) -> int:
     from .scene import run_scene
 
     overrides = dict(parse_assignment(text) for text in args.assignments)
-    for path, suffixes in ((args.plot, (".png", ".pdf", ".svg")), (args.output, (".nc",))):
-        if path is not None and not path.lower().endswith(suffixes):
-            raise ParameterError(f"{path!r}: the file name must end in {' or '.join(suffixes)}")
+    for path, suffixes in ((args.plot, _FIGURES), (args.output, (".nc",))):
+        if path is not None:
+            _check_output(path, suffixes)
     resolve_parameters(args.preset, **overrides)  # bad input: one line, before anything else
     _announce_compilation()
     result = run_scene(args.preset, **overrides)
@@ -151,16 +152,24 @@ def _writing(path: str):
         raise ParameterError(f"cannot write {path}: {why}") from None
 
 
-def _check_suffix(path: str, suffixes: tuple) -> None:
+_FIGURES = (".png", ".pdf", ".svg")
+
+
+def _check_output(path: str, suffixes: tuple) -> None:
+    """Refuse, before any work, a file name that cannot be written as asked."""
     if not path.lower().endswith(suffixes):
         raise ParameterError(f"{path!r}: the file name must end in {' or '.join(suffixes)}")
+    if Path(path).is_dir():
+        raise ParameterError(f"{path} is a folder: give a file name")
+    if not Path(path).parent.is_dir():
+        raise ParameterError(f"{path}: the folder {Path(path).parent} does not exist")
 
 
 def _run(args) -> int:
     from .sweep import run_sweep
     from .sweep_file import load_sweep
 
-    _check_suffix(args.output, (".nc",))
+    _check_output(args.output, (".nc",))
     load_sweep(args.sweep_file)  # bad input: one line, before anything else
     if not args.quiet:
         _announce_compilation()
@@ -199,7 +208,7 @@ def _plot(args) -> int:
 
     from .plots import plot_scene, plot_sweep
 
-    _check_suffix(args.output, (".png", ".pdf", ".svg"))
+    _check_output(args.output, _FIGURES)
     try:
         ds = xr.open_dataset(args.dataset)
     except (OSError, ValueError) as error:
