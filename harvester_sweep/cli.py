@@ -147,9 +147,8 @@ def _writing(path: str):
     line, exit 2."""
     try:
         yield
-    except (OSError, RuntimeError) as error:  # (netCDF4 reports HDF5's as RuntimeError)
-        why = getattr(error, "strerror", None) or str(error).splitlines()[0]
-        raise ParameterError(f"cannot write {path}: {why}") from None
+    except OSError as error:
+        raise ParameterError(f"cannot write {path}: {error.strerror or error}") from None
 
 
 _FIGURES = (".png", ".pdf", ".svg")

@@ -23,8 +23,7 @@ def run_on_dask(spec, todo, store, bar, workers, scheduler) -> None:
         # ":0": any free port, so that a dashboard already running elsewhere is no conflict.
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=":0")
-        # Each worker process has its own numba pool: share the cores, don't oversubscribe.
-        threads = max(1, (os.cpu_count() or 1) // workers)
+        threads = threads_per_worker(workers)
     try:
         client = Client(cluster if cluster is not None else scheduler)
     except OSError as error:
@@ -41,3 +40,9 @@ def run_on_dask(spec, todo, store, bar, workers, scheduler) -> None:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def threads_per_worker(workers: int) -> int:
+    """numba threads each of a LocalCluster's ``workers`` processes takes: they share the
+    cores rather than oversubscribe them."""
+    return max(1, (os.cpu_count() or 1) // workers)

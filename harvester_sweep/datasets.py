@@ -133,12 +133,21 @@ def run_attributes(parameters: dict, notes) -> dict:
 
 def write_netcdf(ds: xr.Dataset, path) -> None:
     """Write ``ds`` to ``path`` atomically: to a temporary name beside it, then renamed (a
-    failed write leaves neither)."""
+    failed write leaves neither).
+
+    Raises
+    ------
+    OSError
+        When the file cannot be written (no permission, a full disk); netCDF4 reports what
+        HDF5 refuses as a RuntimeError, raised here as an OSError of its first line.
+    """
     path = Path(path)
     tmp = path.with_name(f".{path.name}.part")
     try:
         ds.to_netcdf(tmp, engine="netcdf4")
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as error:
         tmp.unlink(missing_ok=True)
+        if isinstance(error, RuntimeError):
+            raise OSError(str(error).splitlines()[0]) from error
         raise

@@ -9,7 +9,6 @@ the chunks missing or damaged. The netCDF file is written aside and renamed when
 
 from __future__ import annotations
 
-import os
 import sys
 
 from tqdm import tqdm
@@ -102,9 +101,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         if output is not None:
             try:
                 write_netcdf(ds, output)
-            except (OSError, RuntimeError) as error:  # (netCDF4 reports HDF5's as RuntimeError)
-                why = getattr(error, "strerror", None) or str(error).splitlines()[0]
-                raise store.unwritten(output, why) from None
+            except OSError as error:
+                raise store.unwritten(output, error.strerror or str(error)) from None
             store.remove()
     return ds
 
@@ -115,7 +113,9 @@ def _threads(workers: int | None, scheduler: str | None) -> int:
     if scheduler is not None:
         return 1
     if workers is not None:
-        return workers * max(1, (os.cpu_count() or 1) // workers)
+        from .cluster import threads_per_worker
+
+        return workers * threads_per_worker(workers)
     import numba
 
     return numba.get_num_threads()
