@@ -43,7 +43,8 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
         ``metrics``: float64 (lines, points per line, len(spec.metrics)) in ascending
         frequency order; ``strobe``: float64 (lines, points per line, samples, 2) holding
         the samples of outputs.STROBES, x [m] and V [V]; ``error_estimate``: float64 (lines,
-        points per line) [-]; ``run_time``: integration time [s].
+        points per line) [-]; each of outputs.RUN_OUTPUTS (lines, points per line, its own
+        dimensions); ``run_time``: solve time [s].
     """
     import numba
 
@@ -85,7 +86,9 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
 
     columns = [metric_index(name) for name in spec.metrics]
     strobe = results.strobes[..., list(STROBES.values())]
+    run = {name: arranged(values) for name, values in results.run_outputs().items()}
     return {"metrics": arranged(results.metrics[:, columns]),
             "strobe": arranged(strobe),
             "error_estimate": arranged(results.errors),
+            **run,
             "run_time": np.float64(results.run_time)}

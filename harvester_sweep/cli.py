@@ -237,6 +237,8 @@ def _table(result, preset: str) -> str:
             text = "yes" if value else "no"
         elif isinstance(value, int):
             text = str(value)
+        elif isinstance(value, list):
+            text = " ".join("none" if v is None else f"{v:.4g}" for v in value)
         else:
             text = f"{value:.6g}"
         lines.append(f"  {name:<20} {text:>14}  {'' if unit == '1' else unit:<5} {long_name}")

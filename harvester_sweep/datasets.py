@@ -10,8 +10,13 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .outputs import OUTPUTS, SERIES, STATUS_NAMES, STROBES
+from .outputs import OUTPUTS, RUN_OUTPUTS, SERIES, STATUS_NAMES, STROBES
 from .parameters import PARAMETERS, PRESET_NOTES
+
+
+#: The coordinate of the Floquet multipliers (outputs with dims ("multiplier",)).
+MULTIPLIER = {"multiplier": ("multiplier", np.arange(1, 4), {
+    "units": "1", "long_name": "Floquet multiplier, by decreasing modulus"})}
 
 
 def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Dataset:
@@ -35,8 +40,11 @@ def scene_dataset(result, series: xr.Dataset) -> xr.Dataset:
         value = result.metrics[name]
         if name == "status":
             value = STATUS_NAMES.index(value)
-        ds[name] = ((), np.array(np.nan if value is None else value, dtype=output.dtype),
-                    output.attrs)
+        if output.dims:
+            value = [np.nan if v is None else v for v in value]
+        ds[name] = (output.dims, np.array(np.nan if value is None else value,
+                                          dtype=output.dtype), output.attrs)
+    ds = ds.assign_coords(MULTIPLIER)
     ds.attrs.update(run_attributes(result.parameters, result.notes))
     return ds
 
@@ -47,7 +55,8 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
     ``spec`` is a :class:`harvester_sweep.sweep_file.SweepSpec`; each chunk a dict of
     ``metrics`` (lines, points per line, len(spec.metrics)), ``strobe`` (..., samples, 2:
     x [m], V [V]), ``error_estimate`` and ``run_time`` [s] (see chunks.compute_chunk).
-    Variables: the metrics of ``spec.metrics``, ``error_estimate``, ``strobe_displacement``
+    Variables: the metrics of ``spec.metrics``, ``error_estimate``, the solver's outputs
+    (outputs.RUN_OUTPUTS, the multipliers over ``multiplier``), ``strobe_displacement``
     and ``strobe_voltage`` over ``sample`` when stroboscopic samples were asked; units,
     long names, dtypes and flags from the registry (:mod:`harvester_sweep.outputs`).
     Global attributes: the fixed parameters with their units, the sweep itself, the
@@ -76,11 +85,15 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
         data[output.name] = variable(errors, {
             **output.attrs, "comment": f"points estimated: {spec.error_estimate}; "
                                        + output.comment})
+    for name in RUN_OUTPUTS:
+        output = OUTPUTS[name]
+        values = np.concatenate([c[name] for c in chunks]).astype(output.dtype)
+        data[name] = variable(values, output.attrs, extra=output.dims)
     if spec.samples:
         for col, name in enumerate(STROBES):  # (the columns of a chunk's strobe)
             data[name] = variable(strobe[..., col], OUTPUTS[name].attrs, extra=("sample",))
 
-    coords = {}
+    coords = dict(MULTIPLIER)
     for name, values in spec.grid.items():
         unit = PARAMETERS[name].unit
         coords[name] = (name, values, {"units": unit, "long_name": PARAMETERS[name].description,

@@ -35,7 +35,10 @@ class Output:
         CF comment: when the value is missing, or how it is made.
     where : str
         ``"engine"`` (a column of the engine's metric row), ``"run"`` (made around the
-        engine: error estimate, work done), ``"scene"`` (a scene's only) or ``"sweep"``.
+        engine by the periodic-orbit solver: error estimate, multipliers, work done),
+        ``"scene"`` (a scene's only) or ``"sweep"``.
+    dims : tuple of str
+        Its own dimensions, after those of the point (``multiplier``).
     """
 
     name: str
@@ -44,6 +47,7 @@ class Output:
     dtype: str = "float64"
     comment: str = ""
     where: str = "engine"
+    dims: tuple = ()
 
     @property
     def attrs(self) -> dict:
@@ -89,6 +93,7 @@ STATUS_FLAGS = {"flag_values": np.array([s.code for s in STATUSES], dtype="i1"),
                 "flag_meanings": " ".join(s.flag for s in STATUSES)}
 
 _NO_IMPACT = "NaN when the orbit has no impact (impacts_per_period = 0)"
+_NOT_SETTLED = "NaN where the point did not settle"
 _OUTPUTS = (
     # the engine's metric row, in its order
     Output("power", "W", "mean electrical power V_rms^2/R over the orbit"),
@@ -104,14 +109,27 @@ _OUTPUTS = (
     Output("orbit_period", "1", "forcing periods per orbit (0 when not settled)", "int32"),
     Output("status", "1", "outcome of the run", "int8",
            comment="; ".join(f"{s.code} {s.name}: {s.meaning}" for s in STATUSES)),
-    Output("periods_run", "1", "forcing periods integrated", "int32"),
-    # made around the engine
+    Output("periods_run", "1", "forcing periods of the motion integrated before its orbit "
+           "was found (the Newton iterates and their perturbed copies not counted)", "int32"),
+    # made around the engine by the periodic-orbit solver
     Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max and "
-           "x_min: their change when the run is repeated at twice the steps per period",
+           "x_min: their change when the orbit is solved again at twice the steps per period",
            comment="NaN where not estimated or not settled", where="run"),
+    Output("spectral_radius", "1", "largest modulus of the Floquet multipliers: the orbit "
+           "is stable below 1", comment=_NOT_SETTLED, where="run"),
+    Output("floquet_multipliers_real", "1", "real parts of the Floquet multipliers, the "
+           "eigenvalues of the monodromy matrix over orbit_period forcing periods, largest "
+           "modulus first", comment=_NOT_SETTLED, where="run", dims=("multiplier",)),
+    Output("floquet_multipliers_imag", "1", "imaginary parts of the Floquet multipliers, in "
+           "the order of floquet_multipliers_real", comment=_NOT_SETTLED, where="run",
+           dims=("multiplier",)),
+    Output("steps_per_period", "1", "RK4 steps per forcing period of the orbit reported "
+           "(finer than chosen where the accuracy target asked for it)", "int64", where="run"),
+    Output("rk4_steps", "1", "RK4 steps taken for the point: its motion, the Newton iterates "
+           "with their perturbed copies, the error estimate and any re-solve", "int64",
+           where="run"),
     Output("converged", "1", "steady state reached within the budget of periods (1) or not "
            "(0)", "int8", where="scene"),
-    Output("steps_per_period", "1", "RK4 steps per forcing period", "int64", where="scene"),
     Output("run_time", "s", "wall-clock integration time", where="scene"),
     # a sweep's stroboscopic samples and a scene's recorded orbit
     Output("strobe_displacement", "m", "tip displacement x at the last forcing period "
@@ -124,6 +142,10 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in _OUTPUTS}
 #: The engine's metrics, in the order of its metric row.
 ENGINE_METRICS = tuple(o.name for o in _OUTPUTS if o.where == "engine")
 assert ENGINE_METRICS == METRIC._fields, "the registry and the engine's metric row differ"
+
+#: The solver's outputs every sweep stores beside its metrics (the error estimate is stored
+#: as sweep.error_estimate says).
+RUN_OUTPUTS = tuple(o.name for o in _OUTPUTS if o.where == "run" and o.name != "error_estimate")
 
 #: The stroboscopic samples a sweep keeps, in the order of a chunk's ``strobe`` columns:
 #: dataset variable -> column of the engine's samples (layouts.STATE).

@@ -105,11 +105,19 @@ class Packed:
         float64 (n, len(layouts.STATE)): initial states, at rest.
     refused : numpy.ndarray
         bool (n,): refused before integration (too stiff).
+    accuracy : numpy.ndarray
+        float64 (n,): the error target [-] of a point whose step was chosen automatically
+        (``steps_per_period`` unset, or set to the step it would get), NaN where the step
+        was given: the periodic-orbit solver refines the step of the former only.
+    max_steps : numpy.ndarray
+        float64 (n,): ``max_steps_per_period`` [-], the finest step a refinement may take.
     """
 
     rows: np.ndarray
     states: np.ndarray
     refused: np.ndarray
+    accuracy: np.ndarray
+    max_steps: np.ndarray
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -119,4 +127,11 @@ def pack_points(points) -> Packed:
     """Pack a sequence of validated parameter dicts, each from rest."""
     rows = np.array([pack_parameters(p) for p in points]).reshape(-1, len(PARAM))
     states = np.array([initial_state(p) for p in points]).reshape(-1, len(STATE))
-    return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0)
+    accuracy = np.array([p["accuracy"] if automatic_step(p) else np.nan for p in points])
+    max_steps = np.array([p["max_steps_per_period"] for p in points], dtype=float)
+    return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0, accuracy, max_steps)
+
+
+def automatic_step(p: dict) -> bool:
+    """Whether point ``p``'s step is the one chosen for its accuracy target."""
+    return p["steps_per_period"] == timescales.auto_steps_per_period(p)

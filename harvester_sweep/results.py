@@ -1,10 +1,9 @@
-"""Results: packed points run through the engine, and what comes back, named.
+"""Results: packed points solved to their periodic orbits, and what comes back, named.
 
-:func:`solve` runs the engine on packed points and gives each point chosen for it an
-error estimate by step halving: the point is run again from its final state at twice the
-steps per period, and the estimate is the largest relative change of its metrics
-(:func:`halving_error`). Columns are read by name through the registry
-(:mod:`harvester_sweep.outputs`).
+:func:`solve` hands packed points to the periodic-orbit solver
+(:mod:`harvester_sweep.orbits`), which runs them through the engine to their steady
+states, with Floquet multipliers and, for the points chosen, a step-halving error
+estimate. Columns are read by name through the registry (:mod:`harvester_sweep.outputs`).
 """
 
 from __future__ import annotations
@@ -16,8 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _engine
-from ._engine import METRIC, N_STROBE, PARAM, STATUS
-from .outputs import STATUS_NAMES
+from ._engine import METRIC, STATUS
+from .orbits import solve_orbits
+from .outputs import RUN_OUTPUTS, STATUS_NAMES
 from .packing import Packed
 
 
@@ -38,14 +38,25 @@ class Results:
     errors : numpy.ndarray
         float64 (n,): step-halving error estimates [-], NaN where not estimated or not
         settled.
+    multipliers : numpy.ndarray
+        complex128 (n, 3): Floquet multipliers of the orbit [-], largest modulus first;
+        NaN where not settled.
+    steps : numpy.ndarray
+        int64 (n,): steps per period of the orbit reported (finer than asked where the
+        accuracy target called for it).
+    rk4_steps : numpy.ndarray
+        int64 (n,): RK4 steps taken for each point, all runs included.
     run_time : float
-        Wall-clock time of the engine run, error estimates not included [s].
+        Wall-clock time of the solve, error estimates included [s].
     """
 
     metrics: np.ndarray
     strobes: np.ndarray
     finals: np.ndarray
     errors: np.ndarray
+    multipliers: np.ndarray
+    steps: np.ndarray
+    rk4_steps: np.ndarray
     run_time: float
 
     def point(self, i: int) -> dict:
@@ -53,6 +64,9 @@ class Results:
         integers for counts, None for a missing value (no impact, not estimated)."""
         out = {name: float(self.metrics[i, k]) for k, name in enumerate(METRIC._fields)}
         out["error_estimate"] = float(self.errors[i])
+        for name, values in self.run_outputs().items():
+            value = values[i]
+            out[name] = value.tolist() if value.ndim else value.item()
         status = int(out["status"])
         out["status"] = STATUS_NAMES[status]
         out["converged"] = status == STATUS.settled
@@ -61,12 +75,24 @@ class Results:
         for name, value in out.items():
             if isinstance(value, float) and not math.isfinite(value):
                 out[name] = None  # JSON null: no impact (approach_velocity) or diverged
+            elif isinstance(value, list):
+                out[name] = [v if math.isfinite(v) else None for v in value]
         return out
+
+    def run_outputs(self) -> dict:
+        """The solver's outputs (outputs.RUN_OUTPUTS) by name: arrays of n points, each
+        with its own dimensions after the first."""
+        values = {"spectral_radius": np.abs(self.multipliers[:, 0]),
+                  "floquet_multipliers_real": self.multipliers.real,
+                  "floquet_multipliers_imag": self.multipliers.imag,
+                  "steps_per_period": self.steps, "rk4_steps": self.rk4_steps}
+        assert tuple(values) == RUN_OUTPUTS
+        return values
 
 
 def solve(packed: Packed, successors=None, estimated=None, samples: int = 0,
           on_points=None) -> Results:
-    """Run packed points to steady state.
+    """Solve packed points to their periodic orbits (:func:`harvester_sweep.orbits.solve_orbits`).
 
     Parameters
     ----------
@@ -74,57 +100,23 @@ def solve(packed: Packed, successors=None, estimated=None, samples: int = 0,
         Points from :func:`harvester_sweep.packing.pack_points`; ``packed.states`` are
         not modified.
     successors : numpy.ndarray, optional
-        int (n,): the point that starts from each point's final state, -1 for none
-        (frequency continuation; see the engine's ``run_points``).
+        int (n,): the point that starts from each point's orbit, -1 for none (frequency
+        continuation; see the engine's ``run_points``).
     estimated : numpy.ndarray, optional
-        bool (n,): the points given a step-halving error estimate (default: none).
+        bool (n,): the points given a step-halving error estimate (default: none); those
+        whose step was automatic are solved again at a finer step until the estimate
+        meets their ``accuracy``.
     samples : int
         Stroboscopic samples kept per point.
     on_points : callable, optional
         Called with the number of points newly finished, as they finish.
     """
     n = len(packed)
-    states = packed.states.copy()
-    metrics = np.empty((n, len(METRIC)))
-    strobes = np.empty((n, samples, N_STROBE))
+    chosen = np.zeros(n, dtype=bool) if estimated is None else estimated & ~packed.refused
     _engine.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
-    _engine.run_points(packed.rows, states, metrics, strobes, successors, on_points)
+    orbits = solve_orbits(packed.rows, packed.states, successors, chosen, packed.accuracy,
+                          packed.max_steps, samples, on_points)
     run_time = time.perf_counter() - start
-    errors = np.full(n, np.nan)
-    chosen = np.zeros(n, dtype=bool) if estimated is None else estimated & ~packed.refused
-    if chosen.any():
-        halved = packed.rows[chosen].copy()
-        halved[:, PARAM.steps] *= 2
-        fine = np.empty((len(halved), len(METRIC)))
-        _engine.run_points(halved, states[chosen].copy(), fine,
-                           np.empty((len(halved), 0, N_STROBE)))
-        errors[chosen] = halving_error(metrics[chosen], fine)
-    return Results(metrics, strobes, states, errors, run_time)
-
-
-def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
-    """Error estimate [-] of metric rows from a run and its rerun at twice the steps per
-    period (same points, engine metric rows).
-
-    The largest relative change of ``power`` and ``v_peak`` and of ``x_max`` and ``x_min``
-    (relative to the displacement amplitude): with RK4's 4th order the coarse run's own
-    error is about 16/15 of it. NaN where either run did not settle.
-    """
-    coarse, fine = np.asarray(coarse), np.asarray(fine)
-
-    def change(index, scale):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ratio = np.abs(coarse[..., index] - fine[..., index]) / scale
-        return np.where(scale > 0, ratio, 0.0)
-
-    amplitude = 0.5 * (fine[..., METRIC.x_max] - fine[..., METRIC.x_min])
-    error = np.maximum.reduce([
-        change(METRIC.power, np.abs(fine[..., METRIC.power])),
-        change(METRIC.v_peak, np.abs(fine[..., METRIC.v_peak])),
-        change(METRIC.x_max, amplitude),
-        change(METRIC.x_min, amplitude),
-    ])
-    settled = ((coarse[..., METRIC.status] == STATUS.settled)
-               & (fine[..., METRIC.status] == STATUS.settled))
-    return np.where(settled, error, np.nan)
+    return Results(orbits.metrics, orbits.strobes, orbits.finals, orbits.errors,
+                   orbits.multipliers, orbits.steps, orbits.rk4_steps, run_time)

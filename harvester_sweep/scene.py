@@ -25,7 +25,7 @@ class SceneResult:
         Metric name -> value (units: ``outputs.OUTPUTS``); ``status`` is one of
         ``"settled"``, ``"not settled"``, ``"diverged"``; ``approach_velocity`` is None when
         the orbit has no impact; ``error_estimate`` (step halving, see
-        ``results.halving_error``) is None when the point did not settle.
+        ``orbits.halving_error``) is None when the point did not settle.
     state : numpy.ndarray
         State ``(x [m], v [m/s], V [V], v_imp [m/s])`` at the last period boundary.
     notes : list of str
@@ -106,6 +106,5 @@ def run_scene(preset: str | None = "paper", **parameters) -> SceneResult:
     packed = pack_points([values])
     results = solve(packed, estimated=np.ones(1, dtype=bool))
     out = results.point(0)
-    out["steps_per_period"] = values["steps_per_period"]
     out["run_time"] = results.run_time
     return SceneResult(values, out, results.finals[0], PRESET_NOTES.get(preset or "paper", []))

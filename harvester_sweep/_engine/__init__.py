@@ -21,6 +21,7 @@ from . import cache, hermite, lanes, model, rk4, scheduler, steady
 from .cache import SOURCE_DIGEST
 from .layouts import LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
 from .scheduler import record_series, run_points, warm_up
+from .steady import MAX_ORBIT_PERIOD
 
 cache.flush_if_changed(scheduler._run_threads, (hermite, lanes, model, rk4, scheduler, steady))
 
@@ -33,6 +34,7 @@ def cache_warm() -> bool:
 __all__ = [
     "LANE",
     "LANES",
+    "MAX_ORBIT_PERIOD",
     "METRIC",
     "N_STROBE",
     "PARAM",

@@ -165,7 +165,8 @@ def _record(series, L, i):
         series[i, SERIES.voltage], series[i, SERIES.contact_force] = L[LANE.voltage], L[LANE.fc]
 
 
-def run_points(params, states, metrics, strobes, successors=None, on_points=None) -> None:
+def run_points(params, states, metrics, strobes, successors=None, on_points=None,
+               settle=True) -> None:
     """Run every point to steady state, on all numba threads.
 
     ``params[i]`` is a parameter row (``harvester_sweep.packing``), ``states[i]`` the state
@@ -182,6 +183,9 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     outputs are left unwritten. ``on_points(n)``, when given, is called in this thread as
     points finish (n: how many since the last call); the kernel then runs in another
     thread, and stops taking points when ``on_points`` raises (or on KeyboardInterrupt).
+    ``settle=False`` runs every point for exactly its budget of periods (PARAM.max_periods),
+    with no steady-state test: one evaluation of the period map (``harvester_sweep.orbits``);
+    its metrics are those of the periods run (at most MAX_ORBIT_PERIOD).
     """
     n = params.shape[0]
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
@@ -195,7 +199,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     heads = heads[np.argsort(-params[heads, PARAM.period], kind="stable")]
     threads = max(1, min(numba.get_num_threads(), len(heads)))
     control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
-    args = (params, states, metrics, strobes, successors, heads, control)
+    args = (params, states, metrics, strobes, successors, heads, control, settle)
     if on_points is None:
         _run_threads(*args)
         return
@@ -252,12 +256,12 @@ def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
 
 
 @njit(parallel=True, nogil=True, **JIT)
-def _run_threads(params, states, metrics, strobes, successors, heads, control):
+def _run_threads(params, states, metrics, strobes, successors, heads, control, settle):
     """Every thread takes lines from ``heads`` as its lanes need them (see _next_point),
     so that the threads end together whatever the lines cost."""
     no_series = np.empty((0, len(SERIES)))
     for b in prange(len(control) - 2):
-        _run_queue(params, states, metrics, strobes, no_series, True, heads, successors,
+        _run_queue(params, states, metrics, strobes, no_series, settle, heads, successors,
                    control, b)
 
 

@@ -1,0 +1,587 @@
+"""Periodic orbits of the RK4 period map: how every point reaches its steady state.
+
+A point's steady state is a fixed point ``y* = P^p(y*)`` of the p-period stroboscopic map
+``P^p: y(0) -> y(pT)`` of the engine's own fixed-step RK4 with located contact switches,
+so it is the RK4 solution's own periodic orbit. :func:`solve_orbits` finds it by Newton's
+method from the state the motion has reached, and gives every point its Floquet
+multipliers (the eigenvalues of the monodromy matrix ``dP^p/dy``).
+
+How, and why (docs/numerics.md, "Periodic orbits"):
+
+- **The monodromy matrix by perturbed copies.** Each Newton iterate is run for p periods
+  in one lane and, in three more, from it moved by ``PERTURBATION`` of each component's
+  scale: the columns of the monodromy are the forward differences. The copies are
+  ordinary points of the lane engine (the same RK4, switches located as in the run), so
+  the matrix includes the contact switches without any saltation algebra.
+- **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
+  first evaluation is also the trajectory's next p periods. A converged fixed point is
+  taken only when it is stable (spectral radius below 1) and the trajectory is on its
+  way to it:
+  * an orbit that never reaches the stop is the fixed point of an affine map, found in
+    one Newton step; it is taken only once it is proved that the trajectory from ``t``
+    never reaches the stop either: the homogeneous part of a linear motion loses energy
+    ``E = (k x^2 + m v^2 + C_p V^2) / 2`` (``dE/dt = -c v^2 - V^2/R``), so
+    ``x(t) <= x*_max + sqrt(2 E(t - y*) / k)`` for all later times;
+  * an orbit with contact is taken when ``t`` is in its linear regime: ``P^p(t)`` is
+    closer to ``y*`` than ``t`` is, and the monodromy predicts it (to ``LINEAR_REGIME``).
+  Otherwise the trajectory is integrated on (a chunk as long as all it has run so far,
+  at least ``FIRST_CHUNK`` periods) and Newton tried again from where it got to; a point
+  that never settles (chaos, a budget too short) is still reported as not settled.
+- **Continuation.** A point that follows another on a line (frequency continuation)
+  starts from the orbit that point settled on, with its orbit period as the first guess.
+- **Accuracy met.** A point given an error estimate is solved again at twice the steps
+  per period, by Newton from its orbit with the same monodromy (two short runs); when the
+  step was chosen automatically and the estimate is above ``accuracy``, the point is
+  solved again at the step RK4's fourth order asks for, up to ``REFINEMENTS`` times.
+
+Every decision depends on the point's own numbers only, and the engine gives a point the
+same bits in any lane: a point's result does not depend on the other points, the thread
+count or the chunking.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _engine
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATE, STATUS
+
+#: Forward-difference step of the monodromy, relative to each component's scale [-].
+PERTURBATION = 1e-6
+#: Newton iterations of one attempt before it is given up [-].
+MAX_NEWTON = 8
+#: A trajectory's state is in the linear regime of a fixed point when the monodromy
+#: predicts the next p periods to this fraction of their distance from it [-].
+LINEAR_REGIME = 0.1
+#: ... and within this distance of it, relative to the orbit's amplitudes: the basin of
+#: another attractor may lie closer to an orbit with contact than its linear regime
+#: shows in one look (a 24 x 24 continuation took a period-1 orbit where the motion went
+#: on to a period-3 one when this was not required) [-].
+NEAR = 1e-3
+#: Margin of the no-contact proof, relative to the bound, for the step's own error (RK4
+#: and the Hermite interpolant are far below it at any step the engine takes) [-].
+PROOF_MARGIN = 1e-3
+#: The first chunk of trajectory integrated after a failed attempt [periods].
+FIRST_CHUNK = 8
+#: Re-solves at a finer step for the accuracy target [-].
+REFINEMENTS = 3
+#: Newton's floor from rounding: a correction below this many rounding units of the
+#: period map, times the conditioning of I - M, is converged.
+ROUNDING = 100 * np.finfo(float).eps
+
+D = N_STROBE  # components of the period map's state: x [m], v [m/s], V [V]
+SAMPLES = MAX_ORBIT_PERIOD + 1  # stroboscopic samples read back from each run
+
+# what a point is doing (the phase of :class:`_Points`)
+_WAITING, _NEWTON, _TRANSIENT, _ESTIMATE, _DONE = range(5)
+
+
+@dataclass
+class Orbits:
+    """Every point's steady state.
+
+    Attributes
+    ----------
+    metrics : numpy.ndarray
+        float64 (n, len(layouts.METRIC)): the metrics of the orbit (``status``,
+        ``orbit_period`` and ``periods_run`` as the point ended).
+    strobes : numpy.ndarray
+        float64 (n, samples, 3): the last stroboscopic samples y(nT) [m, m/s, V] (the orbit
+        repeated, for a settled point).
+    finals : numpy.ndarray
+        float64 (n, 4): the state on the orbit at a period boundary (layouts.STATE).
+    multipliers : numpy.ndarray
+        complex128 (n, 3): Floquet multipliers [-], largest modulus first; NaN where the
+        point did not settle.
+    errors : numpy.ndarray
+        float64 (n,): step-halving error estimates [-], NaN where not estimated.
+    steps : numpy.ndarray
+        int64 (n,): the steps per period of the orbit reported.
+    rk4_steps : numpy.ndarray
+        int64 (n,): RK4 steps taken for the point: trajectory, Newton with its perturbed
+        copies, error estimate and re-solves.
+    """
+
+    metrics: np.ndarray
+    strobes: np.ndarray
+    finals: np.ndarray
+    multipliers: np.ndarray
+    errors: np.ndarray
+    steps: np.ndarray
+    rk4_steps: np.ndarray
+
+
+def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
+                 max_steps=None, samples=0, on_points=None) -> Orbits:
+    """Every point's steady state as a periodic orbit of the RK4 period map.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        float64 (n, len(layouts.PARAM)): packed parameter rows (a budget of 0 periods: the
+        point is refused, too stiff).
+    states : numpy.ndarray
+        float64 (n, 4): initial states (layouts.STATE); not modified.
+    successors : numpy.ndarray, optional
+        int (n,): the point that starts from each point's orbit, -1 for none (lines of a
+        frequency continuation, as the engine's ``run_points``).
+    estimated : numpy.ndarray, optional
+        bool (n,): the points given a step-halving error estimate (default: none).
+    accuracy : numpy.ndarray, optional
+        float64 (n,): the error target [-] of points whose step was chosen automatically,
+        NaN where the step was given; with ``max_steps`` (the most steps per period
+        allowed), a point estimated above it is solved again at a finer step.
+    samples : int
+        Stroboscopic samples returned per point.
+    on_points : callable, optional
+        Called with the number of points newly finished after each round of runs; what it
+        raises (KeyboardInterrupt included) stops the solve and is raised again.
+    """
+    n = len(rows)
+    pts = _Points(np.asarray(rows, dtype=float), np.asarray(states, dtype=float),
+                  np.full(n, -1) if successors is None else np.asarray(successors),
+                  np.zeros(n, bool) if estimated is None else np.asarray(estimated, bool),
+                  np.full(n, np.nan) if accuracy is None else np.asarray(accuracy, float),
+                  np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float))
+    pts.start(np.flatnonzero(pts.heads()))
+    while not (pts.phase == _DONE).all():
+        assert ((pts.phase != _WAITING) & (pts.phase != _DONE)).any(), "no point to run"
+        done = pts.round(on_points is not None)
+        if on_points is not None and done:
+            on_points(done)
+    return pts.result(samples)
+
+
+def _norm(d, scale):
+    """Largest component of ``d`` (..., 3) relative to ``scale`` (..., 3)."""
+    return np.max(np.abs(d) / scale, axis=-1)
+
+
+class _Points:
+    """The points of one solve, each a small state machine (its phase) advanced one round
+    of engine runs at a time; all arrays are indexed by point."""
+
+    def __init__(self, rows, states, successors, estimated, accuracy, max_steps):
+        n = len(rows)
+        self.rows, self.successors, self.estimated = rows, successors, estimated
+        self.accuracy, self.max_steps = accuracy, max_steps
+        self.phase = np.full(n, _WAITING)
+        self.begin = states.copy()  # start state (rest, or the predecessor's orbit)
+        self.traj = states.copy()  # the trajectory's state
+        self.run = np.zeros(n)  # trajectory periods run
+        self.work = np.zeros(n)  # RK4 steps taken
+        self.steps = rows[:, PARAM.steps].copy()
+        self.p = np.ones(n, dtype=np.int64)  # orbit period tried
+        self.y = states.copy()  # Newton iterate (or the orbit under estimate)
+        self.iteration = np.zeros(n, dtype=np.int64)
+        self.last = np.full(n, np.inf)  # size of the last Newton correction
+        self.refine = np.zeros(n, dtype=np.int64)  # re-solves at a finer step so far
+        self.t0 = states[:, :D].copy()  # trajectory state at the attempt's start
+        self.t1 = states[:, :D].copy()  # ... and t1_periods periods later
+        self.t1_periods = np.ones(n, dtype=np.int64)
+        self.orbit_steps = self.steps.copy()  # steps per period of the orbit taken
+        self.floor = np.zeros(n)  # Newton's floor at the orbit taken
+        self.released = np.zeros(n, bool)  # successors started
+        self.hint = np.zeros(n)  # periods the trajectory should run next (0: no idea)
+        self.scale = np.ones((n, D))
+        self.scale[:] = self._linear_scale()
+        self.jacobian = np.full((n, D, D), np.nan)
+        self.metrics = np.full((n, len(METRIC)), np.nan)
+        self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
+        self.strobes = np.full((n, SAMPLES, D), np.nan)
+        self.finals = states.copy()
+        self.errors = np.full(n, np.nan)
+        self.status = np.full(n, STATUS.not_settled)
+
+    # -- set-up ------------------------------------------------------------------------
+
+    def heads(self):
+        linked = self.successors[self.successors >= 0]
+        head = np.ones(len(self.rows), bool)
+        head[linked] = False
+        return head
+
+    def _linear_scale(self):
+        """Component scales [m, m/s, V] before any run: the closed-form response without
+        the stop (docs/model.md), floored at the gap."""
+        r = self.rows
+        w = 2 * np.pi / r[:, PARAM.period]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            load = r[:, PARAM.thm] * r[:, PARAM.thc] / (r[:, PARAM.irc] + 1j * w)
+            x = np.abs(r[:, PARAM.amplitude] / (r[:, PARAM.wn2] - w * w + 1j * w * r[:, PARAM.cm]
+                                                + 1j * w * load))
+        x = np.where(np.isfinite(x), x, 0.0)
+        x = np.maximum(x, np.abs(r[:, PARAM.gap]) * 1e-3) + 1e-30
+        return self._scales(x, 0.0)
+
+    def _scales(self, x, v_peak, index=slice(None)):
+        r = self.rows[index]
+        return np.stack([x, r[:, PARAM.v_per_x] * x,
+                         np.maximum(v_peak, r[:, PARAM.voltage_per_x] * x)], axis=-1)
+
+    def start(self, idx):
+        """Points ``idx`` start: refused ones are done at once (their state passes on)."""
+        refused = idx[self.rows[idx, PARAM.max_periods] == 0]
+        if refused.size:
+            self.metrics[refused, :METRIC.orbit_period] = np.nan
+            self.status[refused] = STATUS.too_stiff
+            self.finals[refused] = self.begin[refused]
+            self._finish(refused)
+        idx = idx[self.rows[idx, PARAM.max_periods] > 0]
+        self.traj[idx] = self.begin[idx]
+        self._attempt(idx)
+
+    def _attempt(self, idx):
+        """A Newton attempt from the trajectory's state."""
+        self.phase[idx] = _NEWTON
+        self.y[idx] = self.traj[idx]
+        self.t0[idx] = self.traj[idx, :D]
+        self.iteration[idx] = 0
+        self.last[idx] = np.inf
+
+    # -- one round ---------------------------------------------------------------------
+
+    def round(self, threaded):
+        """Run every point's next request in one engine call and act on the results;
+        returns the number of points that finished."""
+        newton = np.flatnonzero(self.phase == _NEWTON)
+        transient = np.flatnonzero(self.phase == _TRANSIENT)
+        estimate = np.flatnonzero(self.phase == _ESTIMATE)
+        owners = np.concatenate([np.repeat(newton, D + 1), transient, estimate])
+        rows = self.rows[owners].copy()
+        states = np.concatenate([self._copies(newton), self.traj[transient], self.y[estimate]])
+        rows[:, PARAM.steps] = self.steps[owners]
+        rows[:, PARAM.max_periods] = self.p[owners]
+        chunk = np.maximum(self.run[transient], FIRST_CHUNK)
+        hint = self.hint[transient]
+        chunk = np.where(hint > 0, np.clip(hint, self.p[transient], 4 * chunk), chunk)
+        budget = self.rows[transient, PARAM.max_periods] - self.run[transient]
+        k = len(newton) * (D + 1)
+        rows[k:k + len(transient), PARAM.max_periods] = np.minimum(chunk, budget)
+        rows[k + len(transient):, PARAM.steps] *= 2
+        metrics = np.empty((len(owners), len(METRIC)))
+        strobes = np.empty((len(owners), SAMPLES, D))
+        _engine.run_points(rows, states, metrics, strobes, settle=False,
+                           on_points=(lambda _: None) if threaded else None)
+        np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
+        before = int((self.phase == _DONE).sum())
+        m = metrics[:k].reshape(len(newton), D + 1, len(METRIC))
+        f = states[:k].reshape(len(newton), D + 1, len(STATE))
+        self._after_newton(newton, m, f, strobes[:k:D + 1])
+        j = slice(k, k + len(transient))
+        self._after_transient(transient, metrics[j], states[j], strobes[j])
+        j = slice(k + len(transient), None)
+        self._after_estimate(estimate, metrics[j], states[j])
+        return int((self.phase == _DONE).sum()) - before
+
+    def _copies(self, idx):
+        """The Newton iterate of each point and D copies moved by PERTURBATION along each
+        component: (len(idx) * (D + 1), 4)."""
+        out = np.repeat(self.y[idx], D + 1, axis=0).reshape(len(idx), D + 1, len(STATE))
+        for c in range(D):
+            out[:, c + 1, c] += PERTURBATION * self.scale[idx, c]
+        return out.reshape(-1, len(STATE))
+
+    # -- Newton ------------------------------------------------------------------------
+
+    def _after_newton(self, idx, m, f, strobes):
+        if not idx.size:
+            return
+        trajectory = (self.iteration[idx] == 0) & (self.refine[idx] == 0)
+        # the attempt's first run is the trajectory's next p periods
+        first = idx[trajectory]
+        centre = f[:, 0]
+        self.t1[first] = centre[trajectory, :D]
+        self.t1_periods[first] = self.p[first]
+        self.traj[first] = centre[trajectory]
+        self.run[first] += self.p[first]
+        self.metrics[first] = m[trajectory, 0]
+        self.strobes[first] = strobes[trajectory]
+        diverged = trajectory & ~_sane(m[:, 0])
+        if diverged.any():
+            self._diverge(idx[diverged])
+        ok = ~diverged & np.all(_sane(m), axis=1)
+        ok &= np.all(np.isfinite(f[:, :, :D]), axis=(1, 2))
+        y = self.y[idx, :D]
+        xs = np.maximum(np.abs(m[:, 0, METRIC.x_max]), np.abs(m[:, 0, METRIC.x_min]))
+        scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, 0, METRIC.v_peak], 1.0),
+                             idx)
+        scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
+        h = PERTURBATION * self.scale[idx]
+        jac = (f[:, 1:, :D] - f[:, :1, :D]).transpose(0, 2, 1) / h[:, None, :]
+        residual = centre[:, :D] - y
+        step = np.zeros_like(residual)
+        cond = np.full(len(idx), np.inf)
+        a = np.eye(D) - np.where(ok[:, None, None], jac, 0.0)
+        good = ok & (np.abs(np.linalg.det(a / scale[:, :, None] * scale[:, None, :])) > 1e-12)
+        if good.any():
+            step[good] = np.linalg.solve(a[good], residual[good][..., None])[..., 0]
+            scaled = a[good] / scale[good][:, :, None] * scale[good][:, None, :]
+            cond[good] = np.linalg.norm(np.linalg.inv(scaled), ord=np.inf, axis=(1, 2))
+        size = np.where(good, _norm(step, scale), np.inf)
+        floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
+        converged = good & (size <= floor)
+        # a first step far beyond NEAR of an orbit with contact cannot be taken: integrate
+        # on, for about the periods the motion needs to come NEAR (from the monodromy at t)
+        contact = (m[:, 0, METRIC.impacts_per_period] > 0) | ~(
+            m[:, 0, METRIC.x_max] < self.rows[idx, PARAM.gap])
+        far = trajectory & good & contact & (size > 10 * NEAR)
+        if far.any():
+            radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
+            need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * size[far]))
+                           / np.log(np.clip(radius, 1e-3, 1 - 1e-9)))
+            self.hint[idx[far]] = np.where(radius < 1, need, 0)
+        failed = far | ~converged & ~diverged & (
+            ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
+            | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
+        going = ~converged & ~failed & ~diverged
+        self.scale[idx[ok]] = scale[ok]
+        # on: a new iterate
+        g = idx[going]
+        self.y[g, :D] = y[going] + step[going]
+        self.y[g, D:] = centre[going, D:]
+        self.iteration[g] += 1
+        self.last[g] = size[going]
+        # converged: a fixed point; taken or not
+        c = idx[converged]
+        if c.size:
+            self._converged(c, m[converged, 0], centre[converged], strobes[converged],
+                            jac[converged], scale[converged], floor[converged])
+        # failed: integrate on (a re-solve keeps the orbit it had)
+        fails = idx[failed]
+        self.hint[idx[failed & ~far]] = 0
+        self._give_up(fails)
+
+    def _converged(self, idx, m, centre, strobes, jac, scale, floor):
+        p = self.p[idx]
+        y = self.y[idx, :D]
+        # a shorter period that also closes the orbit: solve again at it
+        shorter = np.zeros(len(idx), dtype=np.int64)
+        for d in range(int(p.max()) - 1, 0, -1):
+            sample = strobes[np.arange(len(idx)), SAMPLES - 1 - (p - d).clip(0)]
+            closes = (d < p) & (p % d == 0) & (_norm(sample - y, scale) <= 10 * floor)
+            shorter = np.where(closes, d, shorter)
+        again = shorter > 0
+        if again.any():
+            self.p[idx[again]] = shorter[again]
+            self.iteration[idx[again]] = 1  # (the trajectory already ran this attempt)
+            self.last[idx[again]] = np.inf
+        keep = ~again
+        idx, m, centre, strobes, jac, scale, floor, y = (
+            a[keep] for a in (idx, m, centre, strobes, jac, scale, floor, y))
+        if not idx.size:
+            return
+        p = self.p[idx]
+        mult = np.linalg.eigvals(jac)
+        radius = np.max(np.abs(mult), axis=1)
+        stable = radius < 1.0
+        refining = self.refine[idx] > 0
+        xmax = np.maximum(m[:, METRIC.x_max], centre[:, STATE.x])
+        free = (m[:, METRIC.impacts_per_period] == 0) & (xmax < self.rows[idx, PARAM.gap])
+        e = self.t0[idx] - y
+        r = self.rows[idx]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cv = np.where(r[:, PARAM.thc] != 0, r[:, PARAM.thm] / r[:, PARAM.thc], 0.0)
+        bound = np.sqrt(e[:, 0] ** 2 + (e[:, 1] ** 2 + cv * e[:, 2] ** 2) / r[:, PARAM.wn2])
+        proved = xmax + bound + PROOF_MARGIN * (np.abs(xmax) + bound) < r[:, PARAM.gap]
+        d0 = _norm(e, scale)
+        d1 = _norm(self.t1[idx] - y, scale)
+        # (the trajectory ran t1_periods from t0: a multiple of p)
+        power = np.linalg.matrix_power
+        ahead = np.stack([power(j, max(1, q)) for j, q in
+                          zip(jac, self.t1_periods[idx] // self.p[idx])]) if len(idx) else jac
+        predicted = np.einsum("nij,nj->ni", ahead, e)
+        linear = _norm(self.t1[idx] - y - predicted, scale)
+        on_way = (d0 <= floor) | ((d0 <= NEAR) & (d1 < d0)
+                                  & (linear <= LINEAR_REGIME * d1 + floor))
+        taken = refining | stable & np.where(free, proved, on_way)
+        t = idx[taken]
+        self.metrics[t] = m[taken]
+        self.strobes[t] = strobes[taken]
+        self.finals[t, :D] = y[taken]
+        self.finals[t, D:] = centre[taken, D:]
+        self.y[t] = self.finals[t]
+        self.jacobian[t] = jac[taken]
+        self.orbit_steps[t] = self.steps[t]
+        self.floor[t] = floor[taken]
+        self.status[t] = STATUS.settled
+        self._release(t)  # (the successor need not wait for the error estimate)
+        est = t[self.estimated[t]]
+        self._estimate(est)
+        self._finish(t[~self.estimated[t]])
+        # not taken: integrate on for about the periods the motion needs to come NEAR
+        hint = np.ceil(p[~taken] * np.log(NEAR / (2 * d0[~taken]))
+                       / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
+        self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > NEAR), hint, 0)
+        self._give_up(idx[~taken])
+
+    def _give_up(self, idx):
+        """An attempt that did not give an orbit to take: integrate the trajectory on (a
+        re-solve at a finer step keeps the orbit and estimate it had)."""
+        refining = self.refine[idx] > 0
+        self._finish(idx[refining])
+        idx = idx[~refining]
+        left = self.run[idx] < self.rows[idx, PARAM.max_periods]
+        self.phase[idx[left]] = _TRANSIENT
+        out = idx[~left]
+        self.status[out] = STATUS.not_settled
+        self.finals[out] = self.traj[out]
+        self._finish(out)
+
+    def _diverge(self, idx):
+        self.status[idx] = STATUS.diverged
+        self.metrics[idx, :METRIC.orbit_period] = np.nan
+        self.strobes[idx] = np.nan
+        self.finals[idx] = self.traj[idx]
+        self._finish(idx, diverged=True)
+
+    # -- the trajectory ----------------------------------------------------------------
+
+    def _after_transient(self, idx, m, f, strobes):
+        if not idx.size:
+            return
+        self.run[idx] += m[:, METRIC.periods_run]
+        self.traj[idx] = f
+        self.metrics[idx] = m
+        self.strobes[idx] = strobes
+        bad = ~_sane(m)
+        self._diverge(idx[bad])
+        idx, strobes = idx[~bad], strobes[~bad]
+        out = self.run[idx] >= self.rows[idx, PARAM.max_periods]
+        self.status[idx[out]] = STATUS.not_settled
+        self.finals[idx[out]] = self.traj[idx[out]]
+        self._finish(idx[out])
+        idx, strobes = idx[~out], strobes[~out]
+        self.p[idx] = _orbit_period(strobes, self.scale[idx])
+        self._attempt(idx)
+
+    # -- error estimate and accuracy -----------------------------------------------------
+
+    def _estimate(self, idx):
+        self.phase[idx] = _ESTIMATE
+        self.iteration[idx] = 0
+
+    def _after_estimate(self, idx, m, f):
+        """Quasi-Newton at twice the steps from the orbit, with its monodromy."""
+        if not idx.size:
+            return
+        ok = _sane(m) & np.all(np.isfinite(f[:, :D]), axis=1)
+        a = np.eye(D) - np.where(ok[:, None, None], self.jacobian[idx], 0.0)
+        step = np.zeros((len(idx), D))
+        if ok.any():
+            step[ok] = np.linalg.solve(a[ok], (f[ok, :D] - self.y[idx[ok], :D])[..., None])[..., 0]
+        size = np.where(ok, _norm(step, self.scale[idx]), np.inf)
+        converged = ok & (size <= self.floor[idx])
+        self.iteration[idx] += 1
+        failed = ~converged & (self.iteration[idx] >= 4)
+        going = ~converged & ~failed
+        self.y[idx[going], :D] += step[going]
+        self._finish(idx[failed])
+        c = idx[converged]
+        self.fine[c] = m[converged]
+        self.errors[c] = halving_error(self.metrics[c], m[converged])
+        # the accuracy target: solve again at the step the fourth order asks for
+        target = self.accuracy[c]
+        want = np.ceil(self.steps[c] * (self.errors[c] / target) ** 0.25 * 1.1 / 16) * 16
+        again = (np.isfinite(target) & (self.errors[c] > target) & (self.refine[c] < REFINEMENTS)
+                 & (want <= self.max_steps[c]))
+        r = c[again]
+        self.steps[r] = np.maximum(want[again], self.steps[r] + 16)
+        self.refine[r] += 1
+        self.phase[r] = _NEWTON
+        self.y[r, :D] += step[converged][again]  # the orbit at twice the steps: closer
+        self.iteration[r] = 0
+        self.last[r] = np.inf
+        self._finish(c[~again])
+
+    # -- the end of a point --------------------------------------------------------------
+
+    def _finish(self, idx, diverged=False):
+        """Points ``idx`` are done."""
+        self.phase[idx] = _DONE
+        self._release(idx, diverged)
+
+    def _release(self, idx, diverged=False):
+        """The successors of points ``idx`` start from their orbit (from their own initial
+        state after a divergence), once."""
+        idx = idx[~self.released[idx]]
+        self.released[idx] = True
+        nxt = self.successors[idx]
+        has = nxt >= 0
+        follow, nxt = idx[has], nxt[has]
+        if not nxt.size:
+            return
+        if not diverged:
+            self.begin[nxt] = self.finals[follow]
+        self.p[nxt] = np.where(self.status[follow] == STATUS.settled, self.p[follow], 1)
+        self.start(nxt)
+
+    def result(self, samples):
+        n = len(self.rows)
+        metrics = self.metrics.copy()
+        settled = self.status == STATUS.settled
+        metrics[:, METRIC.status] = self.status
+        metrics[:, METRIC.orbit_period] = np.where(settled, self.p, 0)
+        metrics[:, METRIC.periods_run] = self.run
+        multipliers = np.full((n, D), np.nan + 0j)
+        if settled.any():
+            mult = np.linalg.eigvals(self.jacobian[settled])
+            order = np.argsort(-np.abs(mult), axis=1, kind="stable")
+            multipliers[settled] = np.take_along_axis(mult, order, axis=1)
+        strobes = np.full((n, samples, D), np.nan)
+        age = np.arange(samples)[::-1]  # periods before the end
+        # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
+        p = np.where(settled, self.p, SAMPLES)
+        back = np.where(settled[:, None], age[None, :] % p[:, None], age[None, :])
+        valid = back < SAMPLES
+        taken = np.take_along_axis(self.strobes, (SAMPLES - 1 - back.clip(0, SAMPLES - 1))
+                                   [..., None].repeat(D, axis=2), axis=1)
+        strobes[valid] = taken[valid]
+        return Orbits(metrics, strobes, self.finals, multipliers, self.errors,
+                      self.orbit_steps.astype(np.int64), self.work.astype(np.int64))
+
+
+def _sane(m):
+    """Runs that neither diverged nor went beyond the divergence limit."""
+    return (m[..., METRIC.status] != STATUS.diverged) & np.isfinite(m[..., METRIC.power])
+
+
+def _orbit_period(strobes, scale):
+    """The orbit period suggested by a run's stroboscopic samples (..., SAMPLES, 3): the
+    smallest p whose repeat |y(nT) - y((n-p)T)| is within 10 times the best of any p."""
+    last = strobes[:, -1:, :]
+    gaps = _norm(last - strobes[:, -2::-1][:, :MAX_ORBIT_PERIOD], scale[:, None, :])
+    gaps = np.where(np.isfinite(gaps), gaps, np.inf)
+    best = gaps.min(axis=1, keepdims=True)
+    within = gaps <= 10 * best
+    p = np.argmax(within, axis=1) + 1
+    return np.where(np.isfinite(best[:, 0]), p, 1)
+
+
+def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
+    """Error estimate [-] of metric rows from a run and its rerun at twice the steps per
+    period (same points, engine metric rows).
+
+    The largest relative change of ``power`` and ``v_peak`` and of ``x_max`` and ``x_min``
+    (relative to the displacement amplitude): with RK4's 4th order the coarse run's own
+    error is about 16/15 of it.
+    """
+    coarse, fine = np.asarray(coarse), np.asarray(fine)
+
+    def change(index, scale):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = np.abs(coarse[..., index] - fine[..., index]) / scale
+        return np.where(scale > 0, ratio, 0.0)
+
+    amplitude = 0.5 * (fine[..., METRIC.x_max] - fine[..., METRIC.x_min])
+    return np.maximum.reduce([
+        change(METRIC.power, np.abs(fine[..., METRIC.power])),
+        change(METRIC.v_peak, np.abs(fine[..., METRIC.v_peak])),
+        change(METRIC.x_max, amplitude),
+        change(METRIC.x_min, amplitude),
+    ])
+
+
+__all__ = ["Orbits", "halving_error", "solve_orbits"]
