@@ -13,7 +13,6 @@ import xarray as xr
 from .outputs import OUTPUTS, RUN_OUTPUTS, SERIES, STATUS_NAMES, STROBES
 from .parameters import PARAMETERS, PRESET_NOTES
 
-
 #: The coordinate of the Floquet multipliers (outputs with dims ("multiplier",)).
 MULTIPLIER = {"multiplier": ("multiplier", np.arange(1, 4), {
     "units": "1", "long_name": "Floquet multiplier, by decreasing modulus"})}

@@ -325,8 +325,9 @@ class _Points:
         converged = good & (size <= floor)
         # a first step far beyond NEAR of an orbit with contact cannot be taken: integrate
         # on, for about the periods the motion needs to come NEAR (from the monodromy at t)
-        contact = (m[:, 0, METRIC.impacts_per_period] > 0) | ~(
-            m[:, 0, METRIC.x_max] < self.rows[idx, PARAM.gap])
+        contact = (self.rows[idx, PARAM.khm] > 0) & (
+            (m[:, 0, METRIC.impacts_per_period] > 0)
+            | ~(m[:, 0, METRIC.x_max] < self.rows[idx, PARAM.gap]))
         far = trajectory & good & contact & (size > 10 * NEAR)
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
@@ -386,6 +387,8 @@ class _Points:
             cv = np.where(r[:, PARAM.thc] != 0, r[:, PARAM.thm] / r[:, PARAM.thc], 0.0)
         bound = np.sqrt(e[:, 0] ** 2 + (e[:, 1] ** 2 + cv * e[:, 2] ** 2) / r[:, PARAM.wn2])
         proved = xmax + bound + PROOF_MARGIN * (np.abs(xmax) + bound) < r[:, PARAM.gap]
+        free |= r[:, PARAM.khm] == 0  # (no stop at all: linear everywhere)
+        proved |= r[:, PARAM.khm] == 0
         d0 = _norm(e, scale)
         d1 = _norm(self.t1[idx] - y, scale)
         # (the trajectory ran t1_periods from t0: a multiple of p)

@@ -74,7 +74,7 @@ def plot_sweep(ds, path=None) -> Figure:
     ParameterError
         For a dataset with more than two grid axes: select a slice first (``ds.isel``).
     """
-    axes_names = [d for d in ds.dims if d not in ("direction", "sample")]
+    axes_names = [d for d in ds.dims if d not in ("direction", "sample", "multiplier")]
     if len(axes_names) == 1:
         return _save(_plot_lines(ds, axes_names[0]), path)
     if len(axes_names) == 2:

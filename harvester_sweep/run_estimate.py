@@ -2,9 +2,12 @@
 
 The steps come from the model, not from a trial run: each of a sample of points spread over
 the grid takes the step of its parameters (``steps_per_period``, chosen from its time scales
-when unset) for the periods its slowest transient needs to decay from rest to the settle
-tolerance (at most ``max_periods``). Contact only adds damping, and a point continued from
-its neighbour starts closer to its orbit, so this is rather an upper estimate. The run time
+when unset) for the periodic-orbit solver's runs (:data:`SOLVER_PERIODS`) and for the
+motion it integrates first: one period where the linear response from rest provably stays
+clear of the stop (twice its amplitude below the gap), else the periods the slowest
+transient needs to come within ``orbits.NEAR`` of the orbit (at most ``max_periods``).
+Contact only adds damping, and a point continued from its neighbour starts closer to its
+orbit, so this is rather an upper estimate. The run time
 divides by a typical rate of the lane engine (:data:`SWEEP_STEPS_PER_SECOND`); the progress
 bar's ETA, from the measured rate, takes over once the sweep runs.
 """
@@ -18,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import timescales
+from .linear import linear_response
+from .orbits import NEAR, D
 
 #: RK4 steps a thread of the lane engine takes per second on a sweep, for estimates only:
 #: the benchmark grids run at 1e8-2.5e8 a thread on AMD Zen 3 (benchmarks/results/), and
@@ -25,6 +30,9 @@ from . import timescales
 SWEEP_STEPS_PER_SECOND = 1e8
 #: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
 LONG_RUN_SECONDS = 3600.0
+#: Periods of a point's own step the solver runs besides the motion: Newton, about three
+#: runs of D + 1 lanes, and the error estimate, two runs at twice the steps.
+SOLVER_PERIODS = 3 * (D + 1) + 2 * 2
 #: Points whose parameters are resolved for the estimate, spread evenly over the grid.
 SAMPLE_POINTS = 64
 
@@ -84,10 +92,11 @@ def point_steps(p: dict) -> float:
     point refused as too stiff."""
     if p["steps_per_period"] > p["max_steps_per_period"]:
         return 0.0
-    rate, _ = timescales.slowest_decay(p)
-    settle = math.log(1.0 / p["settle_tolerance"]) * p["frequency"] / rate if rate > 0 \
-        else math.inf
-    return p["steps_per_period"] * min(p["max_periods"], max(settle, 16.0))
+    motion = 1.0
+    if p["hertz_stiffness"] > 0 and 2 * abs(linear_response(**p)[0]) >= p["gap"]:
+        rate, _ = timescales.slowest_decay(p)
+        motion = math.log(1.0 / NEAR) * p["frequency"] / rate if rate > 0 else math.inf
+    return p["steps_per_period"] * (min(p["max_periods"], motion) + SOLVER_PERIODS)
 
 
 def duration(seconds: float) -> str:

@@ -15,7 +15,8 @@ A sweep file::
     chunk_size = 4096             # points per chunk file, rounded to whole frequency lines
                                   # (default: 4096, and 128 lines at least under continuation,
                                   # up to 131072 points)
-    error_estimate = "sample"     # step-halving error estimate on ~64 points, "all" or "none"
+    error_estimate = "all"        # step-halving error estimate (and the accuracy target met)
+                                  # on every point (default), "sample" (~64 points) or "none"
 
 Everything is checked before any integration; a bad entry raises :class:`ParameterError`
 naming its key.
@@ -100,8 +101,9 @@ class SweepSpec:
         Points per chunk, before rounding to whole frequency lines (default: DEFAULT_CHUNK_SIZE,
         and under continuation DEFAULT_CHUNK_LINES lines, up to DEFAULT_CHUNK_CAP points).
     error_estimate : str
-        Which points get a step-halving error estimate: ``"sample"`` (about
-        ERROR_SAMPLE_POINTS spread over the grid), ``"all"`` or ``"none"``.
+        Which points get a step-halving error estimate, and with it the accuracy target met
+        where the step is automatic: ``"all"`` (the default), ``"sample"`` (about
+        ERROR_SAMPLE_POINTS spread over the grid) or ``"none"``.
     base : dict
         The validated parameters of ``preset`` with ``fixed`` (SI units), resolved once:
         what the grid's points share.
@@ -115,7 +117,7 @@ class SweepSpec:
     metrics: tuple
     samples: int
     chunk_size: int
-    error_estimate: str = "sample"
+    error_estimate: str = "all"
     base: dict = None
 
     @property
@@ -256,7 +258,7 @@ def load_sweep(source) -> SweepSpec:
     elif "samples" in options:
         raise ParameterError('sweep.samples: stroboscopic samples need "strobe" in sweep.outputs')
     metrics = tuple(n for n in METRIC_OUTPUTS if n in outputs or (samples and n == "orbit_period"))
-    error_estimate = options.get("error_estimate", "sample")
+    error_estimate = options.get("error_estimate", "all")
     if error_estimate not in ERROR_ESTIMATES:
         raise ParameterError(f"sweep.error_estimate = {value_text(error_estimate)}: must be one of "
                              + ", ".join(f'"{e}"' for e in ERROR_ESTIMATES))

@@ -146,3 +146,33 @@ def assert_same_bits(a: xr.Dataset, b: xr.Dataset) -> None:
         assert a[name].dims == b[name].dims, name
         assert a[name].dtype == b[name].dtype, name
         assert a[name].values.tobytes() == b[name].values.tobytes(), name
+
+
+def period_map_jacobian(p, y, periods=1, rel_step=3e-5, rtol=1e-12):
+    """The reference's period map ``F: y(0) -> y(periods T)`` from forcing phase 0, and its
+    Jacobian (the monodromy matrix) by central differences.
+
+    Returns ``(F(y), J, scale)``: ``scale`` holds each component's largest magnitude on the
+    unperturbed trajectory (dense output, 20001 samples), and column ``j`` of ``J`` uses the
+    step ``rel_step * scale[j]``. The central difference's truncation error is of order
+    ``rel_step^2`` times the squared ratio of the amplitude to the Hertz penetration (~10
+    at Table 1); the integration's error, smooth in ``y`` between the restarts at the
+    switches, enters divided by ``rel_step``. Between ``rel_step`` 1e-5 and 1e-4 the
+    eigenvalues of ``J`` agree to ~1e-9 at both presets (rtol 1e-11 to 1e-13)."""
+    y = np.asarray(y, float)[:3]
+    t1 = periods / p["frequency"]
+    image, pieces = Reference(p, rtol=rtol).integrate(y, 0.0, t1, dense=True)
+    t = np.linspace(0.0, t1, 20001)
+    scale = np.zeros(3)
+    for sol, _ in pieces:
+        inside = t[(t >= sol.t[0]) & (t <= sol.t[-1])]
+        if inside.size:
+            scale = np.maximum(scale, np.abs(sol.sol(inside)[:3]).max(axis=1))
+    jacobian = np.empty((3, 3))
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = rel_step * scale[j]
+        ahead = Reference(p, rtol=rtol).integrate(y + step, 0.0, t1)[0][:3]
+        behind = Reference(p, rtol=rtol).integrate(y - step, 0.0, t1)[0][:3]
+        jacobian[:, j] = (ahead - behind) / (2 * step[j])
+    return image[:3], jacobian, scale

@@ -5,11 +5,11 @@ import numpy as np
 
 from harvester_sweep import _engine, packing, resolve_parameters, run_scene
 from harvester_sweep._engine import METRIC
-from harvester_sweep.outputs import STATUS_NAMES
+from harvester_sweep.results import solve
 
 
 def _strip(metrics):
-    return {k: v for k, v in metrics.items() if k != "run_time"}
+    return {k: v for k, v in metrics.items() if k not in ("run_time", "converged")}
 
 
 def test_same_scene_same_bits():
@@ -17,26 +17,22 @@ def test_same_scene_same_bits():
 
 
 def test_point_independent_of_threads_and_neighbours():
+    """A scene and the same point solved among others (with and without contact, one
+    continued from another), on one and two threads: the periodic-orbit solver gives the
+    same bits, multipliers and error estimate included."""
     alone = run_scene("paper", gap=1.2e-6)
-    gaps = [0.5e-6, 1.2e-6, 3e-6, 1.0]
-    rows = np.array([packing.pack_parameters(resolve_parameters("paper", gap=g)) for g in gaps])
-    results = []
+    points = [resolve_parameters("paper", gap=g) for g in (0.5e-6, 1.2e-6, 3e-6, 1.0)]
+    packed = packing.pack_points(points)
+    successors = np.array([-1, -1, 3, -1])  # (the gap of 1 m starts from the 3 um orbit)
+    runs = []
     for threads in (1, 2):
         numba.set_num_threads(threads)
-        states = np.array([packing.initial_state(resolve_parameters("paper"))] * len(gaps))
-        metrics = np.empty((len(gaps), len(METRIC)))
-        _engine.run_points(rows, states, metrics, np.empty((len(gaps), 0, 3)))
-        results.append((metrics, states))
+        runs.append(solve(packed, successors, np.ones(4, dtype=bool)))
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-    np.testing.assert_array_equal(results[0][0], results[1][0])
-    np.testing.assert_array_equal(results[0][1], results[1][1])
-    for i, name in enumerate(METRIC._fields):
-        value = alone.metrics[name]
-        if name == "status":
-            assert STATUS_NAMES[int(results[0][0][1, i])] == value
-        elif value is not None:
-            assert results[0][0][1, i] == value, name
-    np.testing.assert_array_equal(results[0][1][1], alone.state)
+    for name in ("metrics", "finals", "errors", "multipliers", "steps", "rk4_steps"):
+        np.testing.assert_array_equal(getattr(runs[0], name), getattr(runs[1], name))
+    assert _strip(runs[0].point(1)) == _strip({**alone.metrics, "converged": True})
+    np.testing.assert_array_equal(runs[0].finals[1], alone.state)
 
 
 def test_point_same_bits_in_every_lane():

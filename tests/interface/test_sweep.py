@@ -10,6 +10,7 @@ import pytest
 import xarray as xr
 
 from harvester_sweep import chunk_store, chunks, cli, datasets, sweep
+from harvester_sweep.outputs import RUN_OUTPUTS
 from harvester_sweep.parameters import ParameterError, resolve_parameters
 from harvester_sweep.scene import run_scene
 from harvester_sweep.sweep import run_sweep
@@ -97,15 +98,18 @@ def test_every_variable_has_cf_units_and_the_file_holds_the_run(tmp_path):
 def test_outputs_select_what_is_computed_and_stored():
     grid = {"frequency": [140.0, 150.0]}
     ds = run_sweep(spec(grid, outputs=["power"]), progress=False)
-    # error_estimate: on a sample of points unless sweep.error_estimate = "none"
-    assert set(ds.data_vars) == {"power", "status", "periods_run", "error_estimate"}
+    # error_estimate: on every point unless sweep.error_estimate says otherwise; the
+    # periodic-orbit solver's outputs always
+    assert set(ds.data_vars) == {"power", "status", "periods_run", "error_estimate",
+                                 *RUN_OUTPUTS}
     assert "sample" not in ds.dims
     chunk = chunks.compute_chunk(load_sweep(spec(grid, outputs=["power"])), 0)
     assert chunk["strobe"].shape[2] == 0  # the kernel got S = 0: no strobe buffers
 
     ds = run_sweep(spec(grid, outputs=["x_max", "strobe"], samples=5), progress=False)
     assert set(ds.data_vars) == {"x_max", "orbit_period", "status", "periods_run",
-                                 "strobe_displacement", "strobe_voltage", "error_estimate"}
+                                 "strobe_displacement", "strobe_voltage", "error_estimate",
+                                 *RUN_OUTPUTS}
     assert ds.sizes["sample"] == 5 and list(ds["sample"].values) == [-4, -3, -2, -1, 0]
     # Settled period-1 orbits: every stroboscopic sample is the same point y(nT).
     assert (ds["orbit_period"] == 1).all()
