@@ -185,9 +185,11 @@ class _Points:
         self.floor = np.zeros(n)  # Newton's floor at the orbit taken
         self.released = np.zeros(n, bool)  # successors started
         self.hint = np.zeros(n)  # periods the trajectory should run next (0: no idea)
+        self.tested = np.zeros(n, bool)  # the engine's steady-state test passed
         self.scale = np.ones((n, D))
         self.scale[:] = self._linear_scale()
         self.jacobian = np.full((n, D, D), np.nan)
+        self.first_jacobian = np.full((n, D, D), np.nan)  # at each attempt's start
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
         self.strobes = np.full((n, SAMPLES, D), np.nan)
@@ -263,7 +265,10 @@ class _Points:
         rows[k + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))
         strobes = np.empty((len(owners), SAMPLES, D))
-        _engine.run_points(rows, states, metrics, strobes, settle=False,
+        # (the engine's steady-state test ends a piece of the motion that settles; it never
+        # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer
+        # than the SAMPLES periods the test waits for)
+        _engine.run_points(rows, states, metrics, strobes, settle=True,
                            on_points=(lambda _: None) if threaded else None)
         np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
         before = int((self.phase == _DONE).sum())
@@ -297,8 +302,12 @@ class _Points:
         self.t1_periods[first] = self.p[first]
         self.traj[first] = centre[trajectory]
         self.run[first] += self.p[first]
-        self.metrics[first] = m[trajectory, 0]
-        self.strobes[first] = strobes[trajectory]
+        tested = first[self.tested[first]]  # (keep the orbit the test found)
+        self.metrics[first] = np.where(self.tested[first, None], self.metrics[first],
+                                       m[trajectory, 0])
+        self.strobes[first] = np.where(self.tested[first, None, None], self.strobes[first],
+                                       strobes[trajectory])
+        self.traj[tested] = self.y[tested]
         diverged = trajectory & ~_sane(m[:, 0])
         if diverged.any():
             self._diverge(idx[diverged])
@@ -339,6 +348,7 @@ class _Points:
             | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
         going = ~converged & ~failed & ~diverged
         self.scale[idx[ok]] = scale[ok]
+        self.first_jacobian[first] = jac[trajectory]
         # on: a new iterate
         g = idx[going]
         self.y[g, :D] = y[going] + step[going]
@@ -422,10 +432,19 @@ class _Points:
 
     def _give_up(self, idx):
         """An attempt that did not give an orbit to take: integrate the trajectory on (a
-        re-solve at a finer step keeps the orbit and estimate it had)."""
+        re-solve at a finer step keeps the orbit and estimate it had; an orbit found by
+        the engine's steady-state test stands, with the monodromy of the attempt's first
+        run, at its state)."""
         refining = self.refine[idx] > 0
         self._finish(idx[refining])
         idx = idx[~refining]
+        tested = idx[self.tested[idx]]
+        self.status[tested] = STATUS.settled
+        self.finals[tested] = self.traj[tested]
+        self.jacobian[tested] = self.first_jacobian[tested]
+        self._release(tested)
+        self._finish(tested)  # (not estimated: the orbit is not a fixed point to Newton)
+        idx = idx[~self.tested[idx]]
         left = self.run[idx] < self.rows[idx, PARAM.max_periods]
         self.phase[idx[left]] = _TRANSIENT
         out = idx[~left]
@@ -456,8 +475,14 @@ class _Points:
         self.status[idx[out]] = STATUS.not_settled
         self.finals[idx[out]] = self.traj[idx[out]]
         self._finish(idx[out])
-        idx, strobes = idx[~out], strobes[~out]
-        self.p[idx] = _orbit_period(strobes, self.scale[idx])
+        idx, strobes, m = idx[~out], strobes[~out], m[~out]
+        # the engine's steady-state test passed: Newton polishes the orbit and gives its
+        # multipliers; where it cannot (a period map too rough for it), the orbit the test
+        # found stands (_give_up)
+        settled = m[:, METRIC.status] == STATUS.settled
+        self.tested[idx[settled]] = True
+        self.p[idx] = np.where(settled, m[:, METRIC.orbit_period].astype(np.int64),
+                               _orbit_period(strobes, self.scale[idx]))
         self._attempt(idx)
 
     # -- error estimate and accuracy -----------------------------------------------------
