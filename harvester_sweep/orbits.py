@@ -470,7 +470,7 @@ class _Points:
         self.strobes[idx] = strobes
         bad = ~_sane(m)
         self._diverge(idx[bad])
-        idx, strobes = idx[~bad], strobes[~bad]
+        idx, strobes, m = idx[~bad], strobes[~bad], m[~bad]
         out = self.run[idx] >= self.rows[idx, PARAM.max_periods]
         self.status[idx[out]] = STATUS.not_settled
         self.finals[idx[out]] = self.traj[idx[out]]
