@@ -52,10 +52,20 @@ def cpu() -> dict:
     mhz = max(float(line.split(":", 1)[1]) for line in lines if line.startswith("cpu MHz"))
     flags = next(line for line in lines if line.startswith("flags")).split()
     width = 8 if "avx512f" in flags else 4 if "avx" in flags else 2
+    simd = "AVX-512" if width == 8 else "AVX2" if width == 4 else "SSE2"
+    # The width the CPU executes, not the one it decodes: AMD Zen 1 and Zen+ (family 23,
+    # models below 0x30) split a 256-bit AVX2 operation into two 128-bit ones, so their
+    # vector gain is half (8 DP flops per cycle per core, not 16).
+    field = {line.split(":", 1)[0].strip(): line.split(":", 1)[1].strip() for line in lines
+             if ":" in line and line.split(":", 1)[0].strip() in ("vendor_id", "cpu family",
+                                                                  "model")}
+    if (field.get("vendor_id") == "AuthenticAMD" and field.get("cpu family") == "23"
+            and int(field.get("model", "0")) < 0x30):
+        width, simd = min(width, 2), simd + " on 128-bit units"
     per_cycle = width * 2 * (2 if "fma" in flags else 1)  # two FMA pipes, an FMA counts 2
     cores = len(os.sched_getaffinity(0))
     return {"model": model, "cores": cores, "clock": mhz * 1e6, "per_cycle": per_cycle,
-            "simd": "AVX-512" if width == 8 else "AVX2" if width == 4 else "SSE2",
+            "simd": simd,
             "peak": cores * mhz * 1e6 * per_cycle}
 
 

@@ -1,0 +1,164 @@
+"""Steady states by transient integration (a checkout before the periodic-orbit solver)
+against periodic orbits (this checkout), in one process, runs alternated.
+
+    git worktree add /tmp/before 12842c4
+    python -m benchmarks.steady_states /tmp/before .   [--rounds 3] [--chunks 5]
+
+Figures (each time the best of the rounds, the two checkouts run in turn so that they see
+the same drift of this shared machine):
+
+- the 64 x 64 gap x frequency sweep of benchmarks/test_speed.py (paper scene, 1024 steps
+  per period, every point from rest, no error estimate), end to end through ``run_sweep``:
+  wall time, RK4 steps (Jacobian copies included after), time per settled point, and how
+  far the two agree where both settled;
+- single scenes at the default accuracy (1e-7): the paper scene, a lightly damped
+  resonance and a 1 GOhm load, the last two against the closed form;
+- chunks of 4096 points spread over examples/million_points.toml, each checkout with its
+  own defaults (error estimate on a sample of 64 points before, on every point after):
+  wall time and status counts, extrapolated to the 1e6 points.
+
+Writes benchmarks/results/steady_states.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks.cases import GRID, STEPS_PER_PERIOD, sweep_spec
+from benchmarks.compare import _load
+from tests.helpers import phasor
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULT = ROOT / "benchmarks" / "results" / "steady_states.md"
+SCENES = {
+    "paper scene": {},
+    "lightly damped resonance (zeta 0.002, 150 Hz, no stop in reach)":
+        {"damping_ratio": 0.002, "frequency": 150.0, "gap": 1.0},
+    "1 GOhm load (no stop in reach)": {"resistance": 1e9, "gap": 1.0},
+}
+
+
+def _cpu() -> str:
+    out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
+    for line in out.splitlines():
+        if line.startswith("Model name"):
+            return line.split(":", 1)[1].strip()
+    return "unknown"
+
+
+def _best(runs: dict, rounds: int, work) -> dict:
+    """``work(tag, hs)`` for each checkout in turn, ``rounds`` times; best time of each and
+    the last result."""
+    times, out = {tag: [] for tag in runs}, {}
+    for _ in range(rounds):
+        for tag, hs in runs.items():
+            start = time.perf_counter()
+            out[tag] = work(tag, hs)
+            times[tag].append(time.perf_counter() - start)
+    return {tag: (min(times[tag]), out[tag]) for tag in runs}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("before", type=Path)
+    parser.add_argument("after", type=Path)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--chunks", type=int, default=5)
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    into = Path(tempfile.mkdtemp())
+    sys.path.insert(0, str(into))
+    runs = {"before": _load("a", args.before, into), "after": _load("b", args.after, into)}
+    for hs in runs.values():  # compile or load each engine outside the timings
+        hs.run_scene("paper")
+    lines = ["# Steady states: transient integration before, periodic orbits after",
+             "", f"- command: `python -m benchmarks.steady_states {args.before} "
+             f"{args.after} --rounds {args.rounds} --chunks {args.chunks}`",
+             f"- machine: {_cpu()}, 2 cores; each time the best of {args.rounds}, "
+             "the two checkouts alternated in one process", ""]
+
+    spec = sweep_spec(GRID)
+    res = _best(runs, args.rounds, lambda tag, hs: hs.run_sweep(spec, progress=False))
+    (t0, a), (t1, b) = res["before"], res["after"]
+    steps_a = float(a.periods_run.sum()) * STEPS_PER_PERIOD
+    steps_b = float(b.rk4_steps.sum())
+    settled_a, settled_b = int((a.status == 0).sum()), int((b.status == 0).sum())
+    both = (a.status == 0) & (b.status == 0) & (a.orbit_period == b.orbit_period)
+    diff = float((abs(a.power - b.power) / abs(a.power)).where(both).max())
+    lines += ["## 64 x 64 gap x frequency sweep, paper scene, 1024 steps per period, from rest",
+              "", "| | before | after | before / after |", "| --- | ---: | ---: | ---: |",
+              f"| wall time, run_sweep end to end | {t0:.2f} s | {t1:.2f} s | "
+              f"**{t0 / t1:.1f} x** |",
+              f"| RK4 steps (after: Newton's copies included) | {steps_a:.3g} | {steps_b:.3g} | "
+              f"{steps_a / steps_b:.1f} x |",
+              f"| settled points | {settled_a} | {settled_b} | |",
+              f"| wall time per settled point | {1e3 * t0 / settled_a:.3f} ms | "
+              f"{1e3 * t1 / settled_b:.3f} ms | {t0 / settled_a / (t1 / settled_b):.1f} x |",
+              "", f"Largest relative difference of `power` where both settled on orbits of "
+              f"the same period ({int(both.sum())} points): {diff:.1e}.", ""]
+
+    lines += ["## Single scenes at the default accuracy (1e-7)", "",
+              "| scene | before: time, periods, steps/period, error estimate | after: time, "
+              "periods of the motion, RK4 steps, steps/period, error estimate | error against "
+              "the closed form before / after |", "| --- | --- | --- | --- |"]
+    for name, overrides in SCENES.items():
+        res = _best(runs, 5, lambda tag, hs: hs.run_scene("paper", **overrides))
+        (t0, a), (t1, b) = res["before"], res["after"]
+        ma, mb = a.metrics, b.metrics
+        exact = ""
+        if overrides.get("gap") == 1.0:
+            X, V = phasor(**b.parameters)
+            power = abs(V) ** 2 / (2 * b.parameters["resistance"])
+            exact = (f"{abs(ma['power'] / power - 1):.1e} / "
+                     f"{abs(mb['power'] / power - 1):.1e}")
+        lines.append(
+            f"| {name} | {1e3 * t0:.1f} ms, {ma['periods_run']}, {ma['steps_per_period']}, "
+            f"{ma['error_estimate']:.1e} | {1e3 * t1:.1f} ms, {mb['periods_run']}, "
+            f"{mb['rk4_steps']:,}, {mb['steps_per_period']}, {mb['error_estimate']:.1e} | "
+            f"{exact} |")
+    lines.append("")
+
+    million = ROOT / "examples" / "million_points.toml"
+    picks = None
+    rows = []
+    totals = {"before": 0.0, "after": 0.0}
+    for tag, hs in runs.items():
+        sweep_file = __import__(hs.__name__ + ".sweep_file", fromlist=["x"])
+        chunks = __import__(hs.__name__ + ".chunks", fromlist=["x"])
+        spec = sweep_file.load_sweep(million)
+        picks = np.linspace(0, spec.n_chunks - 1, args.chunks).round().astype(int)
+        for k in picks:
+            start = time.perf_counter()
+            c = chunks.compute_chunk(spec, int(k))
+            elapsed = time.perf_counter() - start
+            status = c["metrics"][..., list(spec.metrics).index("status")].ravel()
+            totals[tag] += elapsed
+            rows.append((tag, int(k), elapsed, np.bincount(status.astype(int), minlength=4)))
+    n_chunks = spec.n_chunks
+    lines += ["## examples/million_points.toml, a sample of its chunks", "",
+              f"{args.chunks} of its {n_chunks} chunks of 4096 points, spread evenly, each "
+              "checkout with its defaults (before: error estimate on ~64 points of the grid; "
+              "after: on every point, each meeting the accuracy target). Run one after the "
+              "other, not alternated.", "",
+              "| checkout | chunk | time | settled / not settled / diverged |",
+              "| --- | ---: | ---: | --- |"]
+    lines += [f"| {tag} | {k} | {t:.1f} s | {s[0]} / {s[1]} / {s[2]} |" for tag, k, t, s in rows]
+    lines += ["", "Extrapolated to the whole sweep (time of the sample x chunks / sample): "
+              + ", ".join(f"{tag} {math.ceil(totals[tag] * n_chunks / args.chunks / 60)} min"
+                          for tag in totals), ""]
+    text = "\n".join(lines)
+    print(text)
+    RESULT.write_text(text)
+
+
+if __name__ == "__main__":
+    main()
