@@ -55,10 +55,11 @@ MAX_NEWTON = 8
 #: A trajectory's state is in the linear regime of a fixed point when the monodromy
 #: predicts the next p periods to this fraction of their distance from it [-].
 LINEAR_REGIME = 0.1
-#: ... and within this distance of it, relative to the orbit's amplitudes: the basin of
-#: another attractor may lie closer to an orbit with contact than its linear regime
-#: shows in one look (a 24 x 24 continuation took a period-1 orbit where the motion went
-#: on to a period-3 one when this was not required) [-].
+#: ... and within this distance of it, relative to the orbit's amplitudes: a guard, as one
+#: look at the linear regime is a heuristic and near a fold the basin of another
+#: attractor lies close to the orbit. Not shown necessary: the 24 x 24 grids of
+#: tests/physics/test_orbits.py pass without it; it costs the periods the motion takes to
+#: come this near [-].
 NEAR = 1e-3
 #: Margin of the no-contact proof, relative to the bound, for the step's own error (RK4
 #: and the Hermite interpolant are far below it at any step the engine takes) [-].
@@ -324,11 +325,13 @@ class _Points:
         step = np.zeros_like(residual)
         cond = np.full(len(idx), np.inf)
         a = np.eye(D) - np.where(ok[:, None, None], jac, 0.0)
-        good = ok & (np.abs(np.linalg.det(a / scale[:, :, None] * scale[:, None, :])) > 1e-12)
+        scaled = a / scale[:, :, None] * scale[:, None, :]  # (I - M) in scaled components
+        good = ok & (np.abs(np.linalg.det(scaled)) > 1e-12)
         if good.any():
-            step[good] = np.linalg.solve(a[good], residual[good][..., None])[..., 0]
-            scaled = a[good] / scale[good][:, :, None] * scale[good][:, None, :]
-            cond[good] = np.linalg.norm(np.linalg.inv(scaled), ord=np.inf, axis=(1, 2))
+            inverse = np.linalg.inv(scaled[good])
+            step[good] = scale[good] * np.einsum("nij,nj->ni", inverse,
+                                                 residual[good] / scale[good])
+            cond[good] = np.linalg.norm(inverse, ord=np.inf, axis=(1, 2))
         size = np.where(good, _norm(step, scale), np.inf)
         floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
         converged = good & (size <= floor)
@@ -401,11 +404,12 @@ class _Points:
         proved |= r[:, PARAM.khm] == 0
         d0 = _norm(e, scale)
         d1 = _norm(self.t1[idx] - y, scale)
-        # (the trajectory ran t1_periods from t0: a multiple of p)
-        power = np.linalg.matrix_power
-        ahead = np.stack([power(j, max(1, q)) for j, q in
-                          zip(jac, self.t1_periods[idx] // self.p[idx])]) if len(idx) else jac
-        predicted = np.einsum("nij,nj->ni", ahead, e)
+        # (the trajectory ran t1_periods from t0: q = t1_periods / p maps of p periods)
+        q = np.maximum(self.t1_periods[idx] // p, 1)
+        predicted = e
+        for k in range(int(q.max())):
+            predicted = np.where((k < q)[:, None], np.einsum("nij,nj->ni", jac, predicted),
+                                 predicted)
         linear = _norm(self.t1[idx] - y - predicted, scale)
         on_way = (d0 <= floor) | ((d0 <= NEAR) & (d1 < d0)
                                   & (linear <= LINEAR_REGIME * d1 + floor))

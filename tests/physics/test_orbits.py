@@ -130,9 +130,9 @@ def test_same_attractors_as_the_transient(direction):
 
 
 def test_hysteresis_up_and_down():
-    """Swept up and down, some points of the grid settle on different orbits (the stop's
-    hysteresis), each the one the transient reaches from the same state: the two sweeps
-    differ where the transients do."""
+    """Swept up and down, some points of the grid settle on different orbits: the stop's
+    hysteresis is kept (each point's orbit against the transient from the same state is
+    test_same_attractors_as_the_transient's)."""
     powers = {}
     for direction in ("up", "down"):
         packed, successors = _grid(direction, n=12)
