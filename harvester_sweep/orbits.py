@@ -66,6 +66,9 @@ NEAR = 1e-3
 PROOF_MARGIN = 1e-3
 #: The first chunk of trajectory integrated after a failed attempt [periods].
 FIRST_CHUNK = 8
+#: The most periods of trajectory one round runs for a point [periods]: a longer chunk
+#: goes on in the next rounds, so that no round waits long for one lane.
+SLICE = 64
 #: Re-solves at a finer step for the accuracy target [-].
 REFINEMENTS = 3
 #: Newton's floor from rounding: a correction below this many rounding units of the
@@ -186,6 +189,7 @@ class _Points:
         self.floor = np.zeros(n)  # Newton's floor at the orbit taken
         self.released = np.zeros(n, bool)  # successors started
         self.hint = np.zeros(n)  # periods the trajectory should run next (0: no idea)
+        self.left = np.zeros(n)  # periods of the trajectory's chunk still to run
         self.tested = np.zeros(n, bool)  # the engine's steady-state test passed
         self.scale = np.ones((n, D))
         self.scale[:] = self._linear_scale()
@@ -257,12 +261,8 @@ class _Points:
         states = np.concatenate([self._copies(newton), self.traj[transient], self.y[estimate]])
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
-        chunk = np.maximum(self.run[transient], FIRST_CHUNK)
-        hint = self.hint[transient]
-        chunk = np.where(hint > 0, np.clip(hint, self.p[transient], 4 * chunk), chunk)
-        budget = self.rows[transient, PARAM.max_periods] - self.run[transient]
         k = len(newton) * (D + 1)
-        rows[k:k + len(transient), PARAM.max_periods] = np.minimum(chunk, budget)
+        rows[k:k + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
         rows[k + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))
         strobes = np.empty((len(owners), SAMPLES, D))
@@ -450,7 +450,7 @@ class _Points:
         self._finish(tested)  # (not estimated: the orbit is not a fixed point to Newton)
         idx = idx[~self.tested[idx]]
         left = self.run[idx] < self.rows[idx, PARAM.max_periods]
-        self.phase[idx[left]] = _TRANSIENT
+        self._chunk(idx[left])
         out = idx[~left]
         self.status[out] = STATUS.not_settled
         self.finals[out] = self.traj[out]
@@ -465,10 +465,21 @@ class _Points:
 
     # -- the trajectory ----------------------------------------------------------------
 
+    def _chunk(self, idx):
+        """Points ``idx`` integrate their trajectory on: as long as all it has run so far
+        (at least FIRST_CHUNK periods), or the periods the last attempt's monodromy says
+        the motion needs to come NEAR its orbit, within the budget."""
+        self.phase[idx] = _TRANSIENT
+        chunk = np.maximum(self.run[idx], FIRST_CHUNK)
+        hint = self.hint[idx]
+        chunk = np.where(hint > 0, np.clip(hint, self.p[idx], 4 * chunk), chunk)
+        self.left[idx] = np.minimum(chunk, self.rows[idx, PARAM.max_periods] - self.run[idx])
+
     def _after_transient(self, idx, m, f, strobes):
         if not idx.size:
             return
         self.run[idx] += m[:, METRIC.periods_run]
+        self.left[idx] -= m[:, METRIC.periods_run]
         self.traj[idx] = f
         self.metrics[idx] = m
         self.strobes[idx] = strobes
@@ -484,6 +495,8 @@ class _Points:
         # multipliers; where it cannot (a period map too rough for it), the orbit the test
         # found stands (_give_up)
         settled = m[:, METRIC.status] == STATUS.settled
+        on = ~settled & (self.left[idx] > 0)  # the chunk goes on in the next round
+        idx, strobes, m, settled = idx[~on], strobes[~on], m[~on], settled[~on]
         self.tested[idx[settled]] = True
         self.p[idx] = np.where(settled, m[:, METRIC.orbit_period].astype(np.int64),
                                _orbit_period(strobes, self.scale[idx]))

@@ -191,12 +191,14 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
                   else np.ascontiguousarray(successors, dtype=np.int64))
     heads = _line_heads(successors, n)
-    # Lines taken by forcing period (stable: in the callers' order within one): the lanes
-    # of a group then hold points whose contacts come at about the same step of the
-    # period, so that fewer steps of a group run the contact stages (the kernel of a
-    # 64 x 64 gap x frequency sweep built gap-major 3-4 % faster, best and median of 8
-    # alternated runs, measured when each thread had a queue of its own).
-    heads = heads[np.argsort(-params[heads, PARAM.period], kind="stable")]
+    # Lines taken largest budget (periods x steps of their first point) first, so that the
+    # long runs of a round of the orbit solver (1 to orbits.SLICE periods) do not start
+    # last and leave the other lanes idle; then by forcing period (stable: in the callers'
+    # order within one): the lanes of a group then hold points whose contacts come at
+    # about the same step of the period, so that fewer steps of a group run the contact
+    # stages.
+    work = params[heads, PARAM.max_periods] * params[heads, PARAM.steps]
+    heads = heads[np.lexsort((-params[heads, PARAM.period], -work))]
     threads = max(1, min(numba.get_num_threads(), len(heads)))
     control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
     args = (params, states, metrics, strobes, successors, heads, control, settle)
