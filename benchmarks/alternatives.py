@@ -8,7 +8,9 @@
   the contact switch a ``jnp.where`` in the right-hand side, as a GPU/XLA user would write it.
 
 Both integrate (x [m], v [m/s], V [V]) of MODEL.md from rest over a whole number of forcing
-periods and return the final state, so that each can be compared with ``tests/helpers.py``.
+periods and return the state at every period boundary (the last is the final state), so
+that each can be compared with ``tests/helpers.py`` and the steady state's own periodic
+orbit.
 The absolute tolerance is ``rtol`` times (1e-6 m, 1e-2 m/s, 1e-5 V), the scales of the paper
 scene (gap 1 um, velocities of mm/s to cm/s, tens of microvolts), the same scales the error is
 measured in.
@@ -60,7 +62,7 @@ def lsoda(p: dict, periods: int, rtol: float) -> tuple[float, np.ndarray]:
     Returns
     -------
     seconds : wall time of the ``solve_ivp`` call only [s].
-    final_state : (x [m], v [m/s], V [V]) at t = periods / f.
+    states : (periods + 1, 3): (x [m], v [m/s], V [V]) at t = k / f, k = 0 .. periods.
     """
     q = coefficients(p)
     m, k, c, w, theta = q["m"], q["k"], q["c"], q["w"], q["theta"]
@@ -75,11 +77,11 @@ def lsoda(p: dict, periods: int, rtol: float) -> tuple[float, np.ndarray]:
     t1 = periods / p["frequency"]
     start = time.perf_counter()
     sol = solve_ivp(rhs, (0.0, t1), np.zeros(3), method="LSODA", rtol=rtol,
-                    atol=rtol * ATOL_SCALE)
+                    atol=rtol * ATOL_SCALE, t_eval=np.arange(periods + 1) / p["frequency"])
     seconds = time.perf_counter() - start
     if not sol.success:
         raise RuntimeError(f"LSODA failed at rtol {rtol:g}: {sol.message}")
-    return seconds, sol.y[:, -1].copy()
+    return seconds, sol.y.T.copy()
 
 
 def _jax():
@@ -117,12 +119,12 @@ def _ensemble_solver(max_steps: int):
     term = diffrax.ODETerm(vector_field)
     solver = diffrax.Tsit5()
 
-    def one(w, q, t1, rtol, atol):
+    def one(w, q, ts, rtol, atol):
         sol = diffrax.diffeqsolve(
-            term, solver, t0=0.0, t1=t1, dt0=None, y0=jnp.zeros(3), args=(w, q),
+            term, solver, t0=0.0, t1=ts[-1], dt0=None, y0=jnp.zeros(3), args=(w, q),
             stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
-            saveat=diffrax.SaveAt(t1=True), max_steps=max_steps)
-        return sol.ys[-1], sol.stats["num_steps"]
+            saveat=diffrax.SaveAt(ts=ts), max_steps=max_steps)
+        return sol.ys, sol.stats["num_steps"]
 
     _SOLVERS[max_steps] = jax.jit(jax.vmap(one, in_axes=(0, None, None, None, None)))
     return _SOLVERS[max_steps]
@@ -134,9 +136,9 @@ def diffrax_ensemble(p: dict, periods: int, n_points: int, rtol: float, *, sprea
     """A JAX/diffrax ``vmap`` ensemble of ``n_points`` copies of one point, from rest.
 
     Tsit5 with ``PIDController(rtol, atol = rtol * (1e-6 m, 1e-2 m/s, 1e-5 V))``, float64,
-    ``SaveAt(t1=True)``, over ``periods`` forcing periods of the nominal frequency. The lanes'
-    forcing frequencies are spread by up to +-``spread`` (relative) so that XLA cannot fold them
-    into one; lane ``n_points // 2`` has exactly the nominal frequency. The first call compiles
+    saved at every period boundary, over ``periods`` forcing periods of the nominal
+    frequency. The lanes' forcing frequencies are spread by up to +-``spread`` (relative) so
+    that XLA cannot fold them into one; lane ``n_points // 2`` has exactly the nominal frequency. The first call compiles
     (not timed into the result), the second is timed with ``block_until_ready``.
 
     Parameters
@@ -154,7 +156,8 @@ def diffrax_ensemble(p: dict, periods: int, n_points: int, rtol: float, *, sprea
     Returns
     -------
     seconds_per_point : wall time of the timed call divided by ``n_points`` [s].
-    final_states : (n_points, 3) array of (x [m], v [m/s], V [V]) at t = periods / f.
+    states : (n_points, periods + 1, 3): (x [m], v [m/s], V [V]) at t = k / f (nominal
+        frequency), k = 0 .. periods.
 
     Raises
     ------
@@ -167,7 +170,8 @@ def diffrax_ensemble(p: dict, periods: int, n_points: int, rtol: float, *, sprea
          for key, value in coefficients(p).items() if key != "w"}
     offsets = (np.arange(n_points) - n_points // 2) / max(n_points // 2, 1)
     w = jnp.asarray(coefficients(p)["w"] * (1 + spread * offsets), dtype=jnp.float64)
-    args = (w, q, jnp.float64(periods / p["frequency"]), jnp.float64(rtol),
+    args = (w, q, jnp.asarray(np.arange(periods + 1) / p["frequency"], dtype=jnp.float64),
+            jnp.float64(rtol),
             jnp.asarray(rtol * ATOL_SCALE, dtype=jnp.float64))
 
     start = time.perf_counter()
@@ -200,8 +204,8 @@ def main(periods: int = 94, rtols=(1e-6, 1e-8, 1e-10), ensembles=(64, 16)) -> No
     print(f"| {'-' * 20} | {'-' * 6}:| {'-' * 9}:| {'-' * 8}:| {'-' * 7}:|")
     compile_seconds = {}
     for rtol in rtols:
-        seconds, state = lsoda(p, periods, rtol)
-        print(f"| {'scipy LSODA':<20} | {rtol:>6.0e} | {seconds:>9.3g} | {error(state):>8.1e} |"
+        seconds, states = lsoda(p, periods, rtol)
+        print(f"| {'scipy LSODA':<20} | {rtol:>6.0e} | {seconds:>9.3g} | {error(states[-1]):>8.1e} |"
               f" {'':>7} |")
         for n_points in ensembles:
             details = {}
@@ -211,7 +215,7 @@ def main(periods: int = 94, rtols=(1e-6, 1e-8, 1e-10), ensembles=(64, 16)) -> No
                 print(f"| diffrax skipped: {missing}")
                 break
             print(f"| {f'diffrax Tsit5 x{n_points}':<20} | {rtol:>6.0e} | {per_point:>9.3g} |"
-                  f" {error(states[n_points // 2]):>8.1e} | {details['steps']:>7d} |")
+                  f" {error(states[n_points // 2, -1]):>8.1e} | {details['steps']:>7d} |")
             compile_seconds.setdefault(n_points, details["compile_seconds"])
     print("\nLSODA steps not counted; diffrax steps: accepted + rejected of the nominal lane.")
     for n_points, seconds in compile_seconds.items():

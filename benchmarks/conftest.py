@@ -115,15 +115,17 @@ def _table(f: dict) -> str:
                     f"(no contact) |")
     n = f.get("ensemble")
     for accuracy, row in sorted(f.get("points", {}).items(), reverse=True):
-        rows.append(f"| paper scene from rest to steady state ({row['periods']} periods x "
-                    f"{row['steps']} steps, accuracy {accuracy:g}), ensemble of {n}: "
-                    f"engine per point, {row['threads']} threads / 1 thread | "
+        rows.append(f"| paper scene from rest to its periodic orbit (accuracy {accuracy:g}: "
+                    f"{row['periods']} periods of motion, {row['rk4_steps']:,} RK4 steps at "
+                    f"{row['steps']} a period, multipliers and error estimate included), "
+                    f"ensemble of {n}: engine per point, {row['threads']} threads / 1 thread | "
                     f"{row['engine'] * 1e3:.3f} ms / {row['engine_1'] * 1e3:.3f} ms | "
-                    f"final-state error {row['error']:.1e} |")
+                    f"distance from the exact orbit {row['error']:.1e} |")
         for key, name in (("lsoda", "SciPy LSODA, one point (1 core)"),
                           ("diffrax", f"JAX/diffrax Tsit5 vmap x{n} (XLA: 1 core busy)")):
             if key in row:
-                rows.append(f"| ... {name}, at the same error ({row[key + '_how']}) | "
+                rows.append(f"| ... {name}, from rest until within the same distance "
+                            f"({row[key + '_how']}) | "
                             f"{row[key] * 1e3:.2f} ms | **{row[key] / row['engine']:.0f} x** "
                             f"the engine; {row[key] / row['engine_1']:.0f} x per core |")
             elif key == "diffrax" and "diffrax_skipped" in f:
