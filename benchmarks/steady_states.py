@@ -7,8 +7,9 @@ against periodic orbits (this checkout), in one process, runs alternated.
 Figures (each time the best of the rounds, the two checkouts run in turn so that they see
 the same drift of this shared machine):
 
-- the 64 x 64 gap x frequency sweep of benchmarks/test_speed.py (paper scene, 1024 steps
-  per period, every point from rest, no error estimate), end to end through ``run_sweep``:
+- 64 x 64 gap x frequency sweeps (paper scene, 1024 steps per period, every point from rest,
+  no error estimate), end to end through ``run_sweep``: the grid of benchmarks/cases.py and
+  the one issue 19 measured (2658 of its points never touch the stop):
   wall time, RK4 steps (Jacobian copies included after), time per settled point, and how
   far the two agree where both settled;
 - single scenes at the default accuracy (1e-7): the paper scene, a lightly damped
@@ -39,6 +40,12 @@ from tests.helpers import phasor
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "benchmarks" / "results" / "steady_states.md"
+GRIDS = {
+    "64 x 64 gap x frequency sweep of benchmarks/cases.py (0.25-4 um, 100-250 Hz)": GRID,
+    "64 x 64 gap x frequency sweep of issue 19 (0-10 um, 100-300 Hz)":
+        {"gap": {"start": 0.0, "stop": 10e-6, "num": 64},
+         "frequency": {"start": 100, "stop": 300, "num": 64}},
+}
 SCENES = {
     "paper scene": {},
     "lightly damped resonance (zeta 0.002, 150 Hz, no stop in reach)":
@@ -86,25 +93,26 @@ def main() -> None:
              f"- machine: {_cpu()}, 2 cores; each time the best of {args.rounds}, "
              "the two checkouts alternated in one process", ""]
 
-    spec = sweep_spec(GRID)
-    res = _best(runs, args.rounds, lambda tag, hs: hs.run_sweep(spec, progress=False))
-    (t0, a), (t1, b) = res["before"], res["after"]
-    steps_a = float(a.periods_run.sum()) * STEPS_PER_PERIOD
-    steps_b = float(b.rk4_steps.sum())
-    settled_a, settled_b = int((a.status == 0).sum()), int((b.status == 0).sum())
-    both = (a.status == 0) & (b.status == 0) & (a.orbit_period == b.orbit_period)
-    diff = float((abs(a.power - b.power) / abs(a.power)).where(both).max())
-    lines += ["## 64 x 64 gap x frequency sweep, paper scene, 1024 steps per period, from rest",
-              "", "| | before | after | before / after |", "| --- | ---: | ---: | ---: |",
-              f"| wall time, run_sweep end to end | {t0:.2f} s | {t1:.2f} s | "
-              f"**{t0 / t1:.1f} x** |",
-              f"| RK4 steps (after: Newton's copies included) | {steps_a:.3g} | {steps_b:.3g} | "
-              f"{steps_a / steps_b:.1f} x |",
-              f"| settled points | {settled_a} | {settled_b} | |",
-              f"| wall time per settled point | {1e3 * t0 / settled_a:.3f} ms | "
-              f"{1e3 * t1 / settled_b:.3f} ms | {t0 / settled_a / (t1 / settled_b):.1f} x |",
-              "", f"Largest relative difference of `power` where both settled on orbits of "
-              f"the same period ({int(both.sum())} points): {diff:.1e}.", ""]
+    for title, grid in GRIDS.items():
+        spec = sweep_spec(grid)
+        res = _best(runs, args.rounds, lambda tag, hs: hs.run_sweep(spec, progress=False))
+        (t0, a), (t1, b) = res["before"], res["after"]
+        steps_a = float(a.periods_run.sum()) * STEPS_PER_PERIOD
+        steps_b = float(b.rk4_steps.sum())
+        settled_a, settled_b = int((a.status == 0).sum()), int((b.status == 0).sum())
+        both = (a.status == 0) & (b.status == 0) & (a.orbit_period == b.orbit_period)
+        diff = float((abs(a.power - b.power) / abs(a.power)).where(both).max())
+        lines += [f"## {title}, paper scene, 1024 steps per period, from rest", "",
+                  "| | before | after | before / after |", "| --- | ---: | ---: | ---: |",
+                  f"| wall time, run_sweep end to end | {t0:.2f} s | {t1:.2f} s | "
+                  f"**{t0 / t1:.1f} x** |",
+                  f"| RK4 steps (after: Newton's copies included) | {steps_a:.3g} | "
+                  f"{steps_b:.3g} | {steps_a / steps_b:.1f} x |",
+                  f"| settled points | {settled_a} | {settled_b} | |",
+                  f"| wall time per settled point | {1e3 * t0 / settled_a:.3f} ms | "
+                  f"{1e3 * t1 / settled_b:.3f} ms | {t0 / settled_a / (t1 / settled_b):.1f} x |",
+                  "", f"Largest relative difference of `power` where both settled on orbits "
+                  f"of the same period ({int(both.sum())} points): {diff:.1e}.", ""]
 
     lines += ["## Single scenes at the default accuracy (1e-7)", "",
               "| scene | before: time, periods, steps/period, error estimate | after: time, "
