@@ -61,8 +61,6 @@ LINEAR_REGIME = 0.1
 #: tests/physics/test_orbits.py pass without it; it costs the periods the motion takes to
 #: come this near [-].
 NEAR = 1e-3
-#: A first Newton step beyond FAR * NEAR ends an attempt on an orbit with contact [-].
-FAR = 1.0
 #: Margin of the no-contact proof, relative to the bound, for the step's own error (RK4
 #: and the Hermite interpolant are far below it at any step the engine takes) [-].
 PROOF_MARGIN = 1e-3
@@ -120,7 +118,7 @@ class Orbits:
 
 
 def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
-                 max_steps=None, samples=0, on_points=None, motion_steps=None) -> Orbits:
+                 max_steps=None, samples=0, on_points=None) -> Orbits:
     """Every point's steady state as a periodic orbit of the RK4 period map.
 
     Parameters
@@ -144,17 +142,13 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     on_points : callable, optional
         Called with the number of points newly finished after each round of runs; what it
         raises (KeyboardInterrupt included) stops the solve and is raised again.
-    motion_steps : numpy.ndarray, optional
-        float64 (n,): steps per period [-] of the motion until it is near its orbit
-        (default: the point's own); never more than the point's own.
     """
     n = len(rows)
     pts = _Points(np.asarray(rows, dtype=float), np.asarray(states, dtype=float),
                   np.full(n, -1) if successors is None else np.asarray(successors),
                   np.zeros(n, bool) if estimated is None else np.asarray(estimated, bool),
                   np.full(n, np.nan) if accuracy is None else np.asarray(accuracy, float),
-                  np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float),
-                  None if motion_steps is None else np.asarray(motion_steps, float))
+                  np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float))
     pts.start(np.flatnonzero(pts.heads()))
     while not (pts.phase == _DONE).all():
         assert ((pts.phase != _WAITING) & (pts.phase != _DONE)).any(), "no point to run"
@@ -173,7 +167,7 @@ class _Points:
     """The points of one solve, each a small state machine (its phase) advanced one round
     of engine runs at a time; all arrays are indexed by point."""
 
-    def __init__(self, rows, states, successors, estimated, accuracy, max_steps, motion):
+    def __init__(self, rows, states, successors, estimated, accuracy, max_steps):
         n = len(rows)
         self.rows, self.successors, self.estimated = rows, successors, estimated
         self.accuracy, self.max_steps = accuracy, max_steps
@@ -183,8 +177,6 @@ class _Points:
         self.run = np.zeros(n)  # trajectory periods run
         self.work = np.zeros(n)  # RK4 steps taken
         self.steps = rows[:, PARAM.steps].copy()
-        # steps per period of the motion (coarser until it is near its orbit, see _chunk)
-        self.motion = self.steps.copy() if motion is None else np.minimum(motion, self.steps)
         self.p = np.ones(n, dtype=np.int64)  # orbit period tried
         self.y = states.copy()  # Newton iterate (or the orbit under estimate)
         self.iteration = np.zeros(n, dtype=np.int64)
@@ -271,7 +263,6 @@ class _Points:
         rows[:, PARAM.max_periods] = self.p[owners]
         k = len(newton) * (D + 1)
         rows[k:k + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
-        rows[k:k + len(transient), PARAM.steps] = self.motion[transient]
         rows[k + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))
         strobes = np.empty((len(owners), SAMPLES, D))
@@ -350,7 +341,7 @@ class _Points:
         contact = (self.rows[idx, PARAM.khm] > 0) & (
             (m[:, 0, METRIC.impacts_per_period] > 0)
             | ~(m[:, 0, METRIC.x_max] < self.rows[idx, PARAM.gap]))
-        far = trajectory & good & contact & (size > FAR * NEAR)
+        far = trajectory & good & contact & (size > NEAR)
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
             need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * size[far]))
@@ -452,11 +443,6 @@ class _Points:
         refining = self.refine[idx] > 0
         self._finish(idx[refining])
         idx = idx[~refining]
-        # an orbit the test found at the motion's coarser step does not stand: the motion
-        # goes on at the point's own step
-        coarse = idx[self.tested[idx] & (self.motion[idx] < self.steps[idx])]
-        self.motion[coarse] = self.steps[coarse]
-        self.tested[coarse] = False
         tested = idx[self.tested[idx]]
         self.status[tested] = STATUS.settled
         self.finals[tested] = self.traj[tested]
@@ -483,18 +469,12 @@ class _Points:
     def _chunk(self, idx):
         """Points ``idx`` integrate their trajectory on: as long as all it has run so far
         (at least FIRST_CHUNK periods), or the periods the last attempt's monodromy says
-        the motion needs to come NEAR its orbit, within the budget. The motion runs at its
-        coarser step but for the budget's last SAMPLES periods, so that a point that never
-        settles is reported at its own step."""
+        the motion needs to come NEAR its orbit, within the budget."""
         self.phase[idx] = _TRANSIENT
         chunk = np.maximum(self.run[idx], FIRST_CHUNK)
         hint = self.hint[idx]
         chunk = np.where(hint > 0, np.clip(hint, self.p[idx], 4 * chunk), chunk)
-        budget = self.rows[idx, PARAM.max_periods] - self.run[idx]
-        last = idx[budget <= SAMPLES]
-        self.motion[last] = self.steps[last]
-        coarse = self.motion[idx] < self.steps[idx]
-        self.left[idx] = np.minimum(chunk, np.where(coarse, budget - SAMPLES, budget))
+        self.left[idx] = np.minimum(chunk, self.rows[idx, PARAM.max_periods] - self.run[idx])
 
     def _after_transient(self, idx, m, f, strobes):
         if not idx.size:
@@ -505,15 +485,7 @@ class _Points:
         self.metrics[idx] = m
         self.strobes[idx] = strobes
         bad = ~_sane(m)
-        # a motion that diverged at its coarser step starts again, at the point's own
-        restart = bad & (self.motion[idx] < self.steps[idx])
-        again = idx[restart]
-        self.motion[again] = self.steps[again]
-        self.traj[again] = self.begin[again]
-        self.run[again] = 0
-        self.hint[again] = 0
-        self._chunk(again)
-        self._diverge(idx[bad & ~restart])
+        self._diverge(idx[bad])
         idx, strobes, m = idx[~bad], strobes[~bad], m[~bad]
         out = self.run[idx] >= self.rows[idx, PARAM.max_periods]
         self.status[idx[out]] = STATUS.not_settled

@@ -111,9 +111,6 @@ class Packed:
         was given: the periodic-orbit solver refines the step of the former only.
     max_steps : numpy.ndarray
         float64 (n,): ``max_steps_per_period`` [-], the finest step a refinement may take.
-    motion_steps : numpy.ndarray
-        float64 (n,): steps per period [-] of the motion that brings a point near its
-        orbit (``timescales.motion_steps_per_period``).
     """
 
     rows: np.ndarray
@@ -121,7 +118,6 @@ class Packed:
     refused: np.ndarray
     accuracy: np.ndarray
     max_steps: np.ndarray
-    motion_steps: np.ndarray
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -131,19 +127,11 @@ def pack_points(points) -> Packed:
     """Pack a sequence of validated parameter dicts, each from rest."""
     rows = np.array([pack_parameters(p) for p in points]).reshape(-1, len(PARAM))
     states = np.array([initial_state(p) for p in points]).reshape(-1, len(STATE))
-    steps = np.array([_solver_steps(p) for p in points], dtype=float).reshape(-1, 2)
+    accuracy = np.array([p["accuracy"] if automatic_step(p) else np.nan for p in points])
     max_steps = np.array([p["max_steps_per_period"] for p in points], dtype=float)
-    return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0, steps[:, 0], max_steps,
-                  steps[:, 1])
+    return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0, accuracy, max_steps)
 
 
-def automatic_step(p: dict, scales: timescales.TimeScales | None = None) -> bool:
+def automatic_step(p: dict) -> bool:
     """Whether point ``p``'s step is the one chosen for its accuracy target."""
-    return p["steps_per_period"] == timescales.auto_steps_per_period(p, scales=scales)
-
-
-def _solver_steps(p: dict) -> tuple[float, int]:
-    """Point ``p``'s accuracy target (NaN where its step was given) and motion step."""
-    scales = timescales.time_scales(p)
-    return (p["accuracy"] if automatic_step(p, scales) else np.nan,
-            timescales.motion_steps_per_period(p, scales))
+    return p["steps_per_period"] == timescales.auto_steps_per_period(p)

@@ -116,7 +116,7 @@ def solve(packed: Packed, successors=None, estimated=None, samples: int = 0,
     _engine.warm_up()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
     orbits = solve_orbits(packed.rows, packed.states, successors, chosen, packed.accuracy,
-                          packed.max_steps, samples, on_points, packed.motion_steps)
+                          packed.max_steps, samples, on_points)
     run_time = time.perf_counter() - start
     return Results(orbits.metrics, orbits.strobes, orbits.finals, orbits.errors,
                    orbits.multipliers, orbits.steps, orbits.rk4_steps, run_time)

@@ -22,10 +22,6 @@ RK4_STABILITY = 2.5
 #: Measured on the paper scene (benchmarks/convergence.py): relative error of the metrics
 #: ~ ERROR_CONSTANT (h w_fast)^4 with contact switches located.
 ERROR_CONSTANT = 2e-4
-#: Accuracy of the step the periodic-orbit solver integrates a point's motion at, until it
-#: is near its orbit (orbits.NEAR = 1e-3 of it, ten times this): the orbit itself is
-#: solved at the point's own step [-].
-MOTION_ACCURACY = 1e-4
 #: Single-thread kernel speed used for run-time estimates in messages [steps/s].
 STEPS_PER_SECOND = 2.5e7
 #: Periods a run typically needs to settle, for run-time estimates in messages.
@@ -91,28 +87,19 @@ def time_scales(p: dict) -> TimeScales:
                       delta)
 
 
-def auto_steps_per_period(p: dict, accuracy: float | None = None,
-                          scales: TimeScales | None = None) -> int:
-    """Steps per forcing period for the accuracy target ``accuracy`` (default
-    ``p["accuracy"]``) [-], within stability (``scales``: ``time_scales(p)``, if known).
+def auto_steps_per_period(p: dict) -> int:
+    """Steps per forcing period for the accuracy target ``p["accuracy"]``, within stability.
 
     The step resolves the fastest oscillation (forcing, natural, contact) so that
     ERROR_CONSTANT (h w)^4 <= accuracy, and keeps every rate at half RK4's stability bound.
     At least 64 steps, rounded up to a multiple of 16.
     """
-    s = time_scales(p) if scales is None else scales
+    s = time_scales(p)
     oscillation = max(s.forcing, s.natural, s.contact)
-    target = p["accuracy"] if accuracy is None else accuracy
-    h_accuracy = (target / ERROR_CONSTANT) ** 0.25 / oscillation
+    h_accuracy = (p["accuracy"] / ERROR_CONSTANT) ** 0.25 / oscillation
     h_stable = 0.5 * RK4_STABILITY / s.fastest()[0]
     steps = math.ceil(1.0 / (p["frequency"] * min(h_accuracy, h_stable)))
     return max(64, 16 * math.ceil(steps / 16))
-
-
-def motion_steps_per_period(p: dict, scales: TimeScales | None = None) -> int:
-    """Steps per forcing period of the motion that brings point ``p`` near its orbit: those
-    for MOTION_ACCURACY, within stability, and never more than the point's own [-]."""
-    return min(p["steps_per_period"], auto_steps_per_period(p, MOTION_ACCURACY, scales))
 
 
 def stability_steps(p: dict) -> tuple[int, str]:
