@@ -9,7 +9,14 @@ import sys
 import warnings
 from pathlib import Path
 
-from .parameters import PARAMETERS, PRESETS, ParameterError, parse_assignment, resolve_parameters
+from .parameters import (
+    PARAMETERS,
+    PRESETS,
+    ParameterError,
+    StabilityWarning,
+    parse_assignment,
+    resolve_parameters,
+)
 
 EXIT_USER_ERROR = 2
 EXIT_DIVERGED = 3
@@ -68,14 +75,35 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    with warnings.catch_warnings():
-        warnings.showwarning = _show_warning
-        return _main(args)
+    shown = _Warnings()
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = shown
+            return _main(args)
+    finally:
+        shown.close()
 
 
-def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """A warning as one line on stderr, without the source line a script's user cannot act on."""
-    print(f"harvester-sweep: warning: {message}", file=sys.stderr)
+class _Warnings:
+    """Warnings as one line each on stderr, without the source line a script's user cannot
+    act on. A StabilityWarning is shown once: an explicit step beyond the contact's bound
+    gives one for every parameter set it is checked on, each naming its own step (hundreds
+    in a sweep); how many more there were is said at the end."""
+
+    def __init__(self):
+        self.stability = 0
+
+    def __call__(self, message, category, filename, lineno, file=None, line=None) -> None:
+        if issubclass(category, StabilityWarning):
+            self.stability += 1
+            if self.stability > 1:
+                return
+        print(f"harvester-sweep: warning: {message}", file=sys.stderr)
+
+    def close(self) -> None:
+        if self.stability > 1:
+            print(f"harvester-sweep: warning: and {self.stability - 1} more parameter sets "
+                  "with the step beyond the estimated stability bound", file=sys.stderr)
 
 
 def _main(args) -> int:

@@ -84,3 +84,18 @@ def test_console_script_runs_without_traceback():
     bad = subprocess.run([sys.executable, "-m", "harvester_sweep.cli", "scene", "--set",
                           "mass=0"], capture_output=True, text=True)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr and "mass [kg]" in bad.stderr
+
+
+def test_a_step_beyond_the_stability_bound_warns_once_per_run(tmp_path, capsys):
+    """An explicit step beyond the contact's stability bound at every point of a sweep: one
+    warning naming a point's step and bound, and one line counting the others (each point
+    used to give its own line)."""
+    sweep = tmp_path / "stiff.toml"
+    sweep.write_text('preset = "paper"\n[parameters]\nsteps_per_period = 256\n'
+                     "max_periods = 300\nhertz_stiffness = 1e12\n[grid]\n"
+                     "frequency = { start = 130, stop = 160, num = 8 }\n")
+    assert main(["run", str(sweep), "--output", str(tmp_path / "stiff.nc")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("estimated RK4 stability bound") == 1
+    more = [line for line in err.splitlines() if "more parameter sets" in line]
+    assert len(more) == 1 and int(more[0].split("and ")[1].split()[0]) >= 7
