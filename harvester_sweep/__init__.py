@@ -5,6 +5,7 @@ the engine (``_engine``, private) -> results -> datasets (xarray, CF netCDF) -> 
 the command line. The registry of outputs (``outputs``) names every metric and status.
 """
 
+from .basins import basin_fractions
 from .outputs import OUTPUTS, STATUSES
 from .parameters import PARAMETERS, PRESETS, ParameterError, TooStiffError, resolve_parameters
 from .scene import SceneResult, run_scene
@@ -23,6 +24,7 @@ __all__ = [
     "SweepSpec",
     "TooStiffError",
     "__version__",
+    "basin_fractions",
     "load_sweep",
     "resolve_parameters",
     "run_scene",

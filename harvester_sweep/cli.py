@@ -247,7 +247,7 @@ def _plot(args) -> int:
 
 
 def _table(result, preset: str) -> str:
-    from .outputs import OUTPUTS
+    from .outputs import OUTPUTS, SCENE_OUTPUTS
 
     p, m = result.parameters, result.metrics
     lines = [f"scene '{preset}': f = {p['frequency']:g} Hz, gap = {p['gap']:g} m, "
@@ -255,9 +255,10 @@ def _table(result, preset: str) -> str:
     lines += [f"  note: {note}" for note in result.notes]
     lines.append("")
     lines.append(f"  {'metric':<20} {'value':>14}  unit")
-    for name, output in OUTPUTS.items():
-        if output.where == "sweep" or name == "status":
+    for name in SCENE_OUTPUTS:
+        if name == "status":
             continue
+        output = OUTPUTS[name]
         value, unit, long_name = m[name], output.units, output.long_name
         if value is None:
             text = "none"

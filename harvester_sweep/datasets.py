@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .outputs import OUTPUTS, RUN_OUTPUTS, SERIES, STATUS_NAMES, STROBES
+from .outputs import OUTPUTS, RUN_OUTPUTS, SCENE_OUTPUTS, SERIES, STATUS_NAMES, STROBES
 from .parameters import PARAMETERS, PRESET_NOTES
 
 #: The coordinate of the Floquet multipliers (outputs with dims ("multiplier",)).
@@ -33,9 +33,8 @@ def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Datase
 def scene_dataset(result, series: xr.Dataset) -> xr.Dataset:
     """One scene: its metrics (scalars), the series of its last orbit periods, its parameters."""
     ds = series.copy()
-    for name, output in OUTPUTS.items():
-        if output.where == "sweep":
-            continue
+    for name in SCENE_OUTPUTS:
+        output = OUTPUTS[name]
         value = result.metrics[name]
         if name == "status":
             value = STATUS_NAMES.index(value)

@@ -36,7 +36,8 @@ class Output:
     where : str
         ``"engine"`` (a column of the engine's metric row), ``"run"`` (made around the
         engine by the periodic-orbit solver: error estimate, multipliers, work done),
-        ``"scene"`` (a scene's only) or ``"sweep"``.
+        ``"scene"`` (a scene's only), ``"sweep"`` or ``"basin"`` (the basins of one point,
+        :mod:`harvester_sweep.basins`).
     dims : tuple of str
         Its own dimensions, after those of the point (``multiplier``).
     """
@@ -131,6 +132,15 @@ _OUTPUTS = (
     Output("converged", "1", "steady state reached within the budget of periods (1) or not "
            "(0)", "int8", where="scene"),
     Output("run_time", "s", "wall-clock integration time", where="scene"),
+    # the basins of one point's coexisting attractors
+    Output("basin_fraction", "1", "fraction of the initial states drawn that reach this "
+           "attractor", where="basin"),
+    Output("basin_fraction_error", "1", "binomial standard error of basin_fraction, "
+           "sqrt(f (1 - f) / samples)", where="basin"),
+    Output("fraction_not_settled", "1", "fraction of the initial states whose motion did "
+           "not settle within max_periods", where="basin"),
+    Output("fraction_diverged", "1", "fraction of the initial states whose integration "
+           "diverged", where="basin"),
     # a sweep's stroboscopic samples and a scene's recorded orbit
     Output("strobe_displacement", "m", "tip displacement x at the last forcing period "
            "boundaries y(nT)", where="sweep"),
@@ -146,6 +156,9 @@ assert ENGINE_METRICS == METRIC._fields, "the registry and the engine's metric r
 #: The solver's outputs every sweep stores beside its metrics (the error estimate is stored
 #: as sweep.error_estimate says).
 RUN_OUTPUTS = tuple(o.name for o in _OUTPUTS if o.where == "run" and o.name != "error_estimate")
+
+#: A scene's outputs (table, JSON, dataset): the engine's, the solver's and its own.
+SCENE_OUTPUTS = tuple(o.name for o in _OUTPUTS if o.where in ("engine", "run", "scene"))
 
 #: The stroboscopic samples a sweep keeps, in the order of a chunk's ``strobe`` columns:
 #: dataset variable -> column of the engine's samples (layouts.STATE).
@@ -175,7 +188,8 @@ def markdown_table() -> str:
         meaning = o.long_name + (f" ({o.comment})" if o.comment and o.name != "status" else "")
         if o.name == "status":
             meaning += ": " + ", ".join(f"{s.code} {s.name}" for s in STATUSES)
-        scope = {"scene": " (scene only)", "sweep": " (sweep, over `sample`)"}.get(o.where, "")
+        scope = {"scene": " (scene only)", "sweep": " (sweep, over `sample`)",
+                 "basin": " (`basin_fractions`)"}.get(o.where, "")
         rows.append(f"| `{o.name}` | {'-' if o.units == '1' else o.units} | {meaning}{scope} |")
     return "\n".join(rows)
 

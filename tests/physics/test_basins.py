@@ -1,0 +1,78 @@
+"""Basins of coexisting attractors against independent references: the closed-form
+stop-free orbit, transient integration from rest, and the count of starts."""
+
+import numba
+import numpy as np
+import pytest
+
+from harvester_sweep import ParameterError, basin_fractions, packing, resolve_parameters
+from harvester_sweep._engine import METRIC, STATUS, run_points
+from tests.helpers import phasor
+
+# A point of the benchmark grid inside the stop's hysteresis band: from rest the motion
+# reaches an orbit with one impact a period, and a stop-free orbit coexists.
+BAND = {"gap": 0.25e-6 + 18 * 3.75e-6 / 63, "frequency": 100 + 61 * 150 / 63,
+        "steps_per_period": 1024}
+
+
+def test_one_attractor_far_below_the_band():
+    ds = basin_fractions(frequency=100.0, steps_per_period=512, samples=64)
+    assert ds.sizes["attractor"] == 1
+    assert float(ds.basin_fraction[0]) == 1.0
+    assert float(ds.fraction_not_settled) == float(ds.fraction_diverged) == 0.0
+
+
+def test_two_attractors_in_the_band_each_the_orbit_a_reference_finds():
+    """Both coexisting orbits are found, every start is counted once, the stop-free one is
+    the closed-form phasor (to RK4's error at 1024 steps) and the impacting one is the orbit
+    transient integration reaches from rest."""
+    ds = basin_fractions(samples=256, **BAND)
+    fractions = ds.basin_fraction.values
+    total = fractions.sum() + float(ds.fraction_not_settled) + float(ds.fraction_diverged)
+    assert total == pytest.approx(1.0, abs=1e-12)
+    impacts = ds.impacts_per_period.values
+    assert (impacts > 0).any() and (impacts == 0).any()
+    assert np.all(fractions[:2] > 0.05)
+
+    free = int(np.flatnonzero(impacts == 0)[0])
+    p = resolve_parameters("paper", **BAND)
+    _, V = phasor(**p)
+    assert float(ds.power[free]) == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]),
+                                                  rel=1e-5)
+
+    p = resolve_parameters("paper", settle_tolerance=1e-12, **BAND)
+    packed = packing.pack_points([p])
+    metrics = np.empty((1, len(METRIC)))
+    run_points(packed.rows, packed.states.copy(), metrics, np.empty((1, 0, 3)))
+    assert metrics[0, METRIC.status] == STATUS.settled
+    assert metrics[0, METRIC.impacts_per_period] > 0
+    hit = int(np.flatnonzero(impacts > 0)[0])
+    assert float(ds.power[hit]) == pytest.approx(metrics[0, METRIC.power], rel=1e-7)
+
+
+def test_the_same_seed_gives_the_same_numbers_on_any_thread_count():
+    threads = numba.get_num_threads()
+    first = basin_fractions(samples=96, seed=3, **BAND)
+    numba.set_num_threads(1)
+    try:
+        again = basin_fractions(samples=96, seed=3, **BAND)
+    finally:
+        numba.set_num_threads(threads)
+    for name in ("basin_fraction", "power", "x_max", "spectral_radius"):
+        np.testing.assert_array_equal(first[name].values, again[name].values)
+    other = basin_fractions(samples=96, seed=4, **BAND)
+    assert not np.array_equal(first.basin_fraction.values, other.basin_fraction.values)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"samples": 0}, "samples [-] = 0"),
+    ({"samples": 2.5}, "samples [-] = 2.5"),
+    ({"seed": -1}, "seed [-] = -1"),
+    ({"box": {"x": -1e-6}}, "box.x [m] = -1e-06"),
+    ({"box": {"y": 1e-6}}, "box.y: unknown"),
+    ({"gap": "wide"}, "gap"),
+])
+def test_bad_input_is_refused_in_one_line_naming_it(kwargs, words):
+    with pytest.raises(ParameterError, match=None) as error:
+        basin_fractions(**kwargs)
+    assert words in str(error.value) and "\n" not in str(error.value)
