@@ -20,7 +20,7 @@ import xarray as xr
 from ._engine import MAX_ORBIT_PERIOD, METRIC, STATUS
 from .datasets import run_attributes
 from .linear import linear_response
-from .outputs import OUTPUTS
+from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
 from .parameters import ParameterError, resolve_parameters
 from .results import solve
@@ -101,7 +101,7 @@ def basin_fractions(preset: str | None = "paper", samples: int = 1000, seed: int
             "basin_fraction_error": (("attractor",), np.sqrt(fraction * (1 - fraction)
                                                               / samples),
                                      OUTPUTS["basin_fraction_error"].attrs),
-            **{name: per_attractor(name, results.metrics[:, METRIC._fields.index(name)])
+            **{name: per_attractor(name, results.metrics[:, metric_index(name)])
                for name in ("orbit_period", "power", "v_peak", "x_max", "x_min",
                             "impacts_per_period", "contact_force_max")},
             "spectral_radius": per_attractor("spectral_radius",
