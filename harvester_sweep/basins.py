@@ -156,7 +156,7 @@ def _group(results) -> list:
         distance = np.min(np.max(np.abs(results.finals[left, None, :3] - orbit[None]) / scale,
                                  axis=2), axis=1)
         member = (period[left] == period[head]) & (distance <= TOLERANCE)
-        member[0] = True
+        member[0] = True  # (the head always leaves, whatever rounding says)
         groups.append(left[member])
         left = left[~member]
     return sorted(groups, key=len, reverse=True)
