@@ -11,7 +11,7 @@ import numpy as np
 import xarray as xr
 
 from .outputs import OUTPUTS, RUN_OUTPUTS, SCENE_OUTPUTS, SERIES, STATUS_NAMES, STROBES
-from .parameters import PARAMETERS, PRESET_NOTES
+from .parameters import PARAMETERS, PRESET_NOTES, resolve_parameters
 
 #: The coordinate of the Floquet multipliers (outputs with dims ("multiplier",)).
 MULTIPLIER = {"multiplier": ("multiplier", np.arange(1, 4), {
@@ -162,3 +162,83 @@ def write_netcdf(ds: xr.Dataset, path) -> None:
         if isinstance(error, RuntimeError):
             raise OSError(str(error).splitlines()[0]) from error
         raise
+
+
+def branch_dataset(branch, spec: dict) -> xr.Dataset:
+    """A branch of orbits (:func:`harvester_sweep.continuation.continue_branch`) along
+    ``point``, in the order followed.
+
+    ``spec`` is the checked problem (continuation.check_continuation). Variables: the
+    continued parameter (named after it, in its unit), the engine's metrics but
+    ``status`` and ``periods_run``, ``error_estimate``, the Floquet multipliers and
+    ``spectral_radius``, ``stable``, ``bifurcation`` (CF flags), ``branch`` and
+    ``arclength``; global attributes: the fixed parameters with their units, the
+    continuation's range and options, why each branch ended and the run time [s].
+    """
+    from .outputs import ENGINE_METRICS
+
+    points = branch.points
+    parameter = spec["parameter"]
+    lam = np.array([pt.lam for pt in points])
+    mult = np.full((len(points), 3), np.nan + 0j)
+    for i, pt in enumerate(points):
+        values = np.linalg.eigvals(pt.monodromy)
+        mult[i] = values[np.argsort(-np.abs(values), kind="stable")]
+    radius = np.abs(mult[:, 0])
+    metrics = np.array([pt.metrics for pt in points])
+    values = {
+        "error_estimate": np.array([pt.error for pt in points]),
+        "spectral_radius": radius,
+        "floquet_multipliers_real": mult.real,
+        "floquet_multipliers_imag": mult.imag,
+        "stable": radius < 1.0,
+        "bifurcation": np.array([pt.bifurcation for pt in points]),
+        "branch": np.array([pt.branch for pt in points]),
+        "arclength": np.array([pt.arclength for pt in points]),
+    }
+    for k, name in enumerate(ENGINE_METRICS):
+        if name not in ("status", "periods_run"):
+            values[name] = metrics[:, k]
+    values["orbit_period"] = np.array([pt.period for pt in points])
+    data = {parameter: ("point", lam, {"units": PARAMETERS[parameter].unit,
+                                       "long_name": PARAMETERS[parameter].description})}
+    for name, value in values.items():
+        output = OUTPUTS[name]
+        attrs = output.attrs
+        if name == "error_estimate":
+            attrs = {**attrs, "comment": "the point corrected again at twice the steps per "
+                                         "period on the hyperplane normal to the branch; "
+                                         + output.comment}
+        data[name] = (("point",) + output.dims, value.astype(output.dtype), attrs)
+    shift = np.array([pt.shift for pt in points])
+    data[f"{parameter}_shift"] = ("point", shift, {
+        "units": PARAMETERS[parameter].unit,
+        "long_name": f"change of {parameter} when the point is corrected again at twice the "
+                     "steps per period: at a fold, the shift of the fold",
+        "comment": "NaN where the correction at twice the steps did not converge"})
+    data[f"{parameter}_precision"] = ("point", np.array([pt.precision for pt in points]), {
+        "units": PARAMETERS[parameter].unit,
+        "long_name": f"width of the bracket that locates a bifurcation in {parameter} "
+                     "(0 at points not located)"})
+    coords = {"point": ("point", np.arange(len(points)), {
+        "units": "1", "long_name": "point along the branches, in the order followed"}),
+        **MULTIPLIER}
+    fixed = resolve_parameters(spec["preset"], **spec["fixed"],
+                               **{parameter: spec["start"], "steps_per_period": spec["steps"]})
+    fixed.pop(parameter)
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec["preset"] or "paper", [])))
+    ds.attrs.update({
+        "title": "harvester_sweep branch of periodic orbits of a piezoelectric harvester with "
+                 "a Hertz stop",
+        "preset": spec["preset"] or "paper",
+        "continued_parameter": parameter,
+        "start": spec["start"], "stop": spec["stop"],
+        "range_units": PARAMETERS[parameter].unit,
+        "step": spec["step"], "min_step": spec["min_step"], "max_step": spec["max_step"],
+        "max_points": spec["max_points"],
+        "period_doubling": "switch" if spec["switch"] else "mark",
+        "ends": "; ".join(branch.stops),
+        "run_time": branch.run_time, "run_time_units": "s",
+    })
+    return ds

@@ -36,8 +36,9 @@ class Output:
     where : str
         ``"engine"`` (a column of the engine's metric row), ``"run"`` (made around the
         engine by the periodic-orbit solver: error estimate, multipliers, work done),
-        ``"scene"`` (a scene's only), ``"sweep"`` or ``"basin"`` (the basins of one point,
-        :mod:`harvester_sweep.basins`).
+        ``"scene"`` (a scene's only), ``"sweep"``, ``"basin"`` (the basins of one point,
+        :mod:`harvester_sweep.basins`) or ``"branch"`` (a branch of orbits,
+        :mod:`harvester_sweep.continuation`).
     dims : tuple of str
         Its own dimensions, after those of the point (``multiplier``).
     """
@@ -58,6 +59,8 @@ class Output:
             attrs["comment"] = self.comment
         if self.name == "status":
             attrs.update(STATUS_FLAGS)
+        if self.name == "bifurcation":
+            attrs.update(BIFURCATION_FLAGS)
         return attrs
 
     def label(self, prefix: str = "") -> str:
@@ -92,6 +95,18 @@ assert [s.code for s in STATUSES] == list(STATUS)
 STATUS_NAMES = tuple(s.name for s in STATUSES)
 STATUS_FLAGS = {"flag_values": np.array([s.code for s in STATUSES], dtype="i1"),
                 "flag_meanings": " ".join(s.flag for s in STATUSES)}
+
+#: What happens to a branch of orbits at a point (harvester_sweep.continuation): the flag
+#: values are the positions, 0 for none.
+BIFURCATIONS = {
+    "none": "a regular point of the branch",
+    "fold": "the branch turns back in the parameter: a Floquet multiplier passes +1",
+    "period_doubling": "a Floquet multiplier passes -1: an orbit of twice the period is born",
+    "neimark_sacker": "a complex pair of Floquet multipliers passes the unit circle",
+    "grazing": "the orbit's x_max reaches the gap: contact switches on or off",
+}
+BIFURCATION_FLAGS = {"flag_values": np.arange(len(BIFURCATIONS), dtype="i1"),
+                     "flag_meanings": " ".join(BIFURCATIONS)}
 
 _NO_IMPACT = "NaN when the orbit has no impact (impacts_per_period = 0)"
 _NOT_SETTLED = "NaN where the point did not settle"
@@ -141,6 +156,17 @@ _OUTPUTS = (
            "not settle within max_periods", where="basin"),
     Output("fraction_diverged", "1", "fraction of the initial states whose integration "
            "diverged", where="basin"),
+    # a branch of orbits (harvester_sweep.continuation), along point
+    Output("stable", "1", "the orbit is stable (1: spectral radius below 1) or not (0)",
+           "int8", where="branch"),
+    Output("bifurcation", "1", "bifurcation located at this point of the branch",
+           "int8", comment="; ".join(f"{k} {name}: {meaning}" for k, (name, meaning)
+                                     in enumerate(BIFURCATIONS.items())), where="branch"),
+    Output("branch", "1", "branch of the point: 0 from rest at start, then the branches "
+           "switched to at period doublings, in the order found", "int16", where="branch"),
+    Output("arclength", "1", "pseudo-arclength from the branch's first point, in the "
+           "scaled components (x, v, V by the start orbit's amplitudes, the parameter by "
+           "the range)", where="branch"),
     # a sweep's stroboscopic samples and a scene's recorded orbit
     Output("strobe_displacement", "m", "tip displacement x at the last forcing period "
            "boundaries y(nT)", where="sweep"),
@@ -189,7 +215,7 @@ def markdown_table() -> str:
         if o.name == "status":
             meaning += ": " + ", ".join(f"{s.code} {s.name}" for s in STATUSES)
         scope = {"scene": " (scene only)", "sweep": " (sweep, over `sample`)",
-                 "basin": " (`basin_fractions`)"}.get(o.where, "")
+                 "basin": " (`basin_fractions`)", "branch": " (`continue_branch`)"}.get(o.where, "")
         rows.append(f"| `{o.name}` | {'-' if o.units == '1' else o.units} | {meaning}{scope} |")
     return "\n".join(rows)
 

@@ -1,0 +1,509 @@
+"""Branches of periodic orbits followed in one parameter, through folds.
+
+A branch is the curve of solutions ``z = (y, lam)`` of ``F(z) = P^p(y; lam) - y = 0``: a
+state ``y = (x, v, V)`` on a period-p orbit at forcing phase 0, and the value ``lam`` of the
+continued parameter. ``P^p`` is the engine's own RK4 period map (contact switches
+located), as in :mod:`harvester_sweep.orbits`, at a step per period fixed for the whole
+branch so that the map is one smooth family. Pseudo-arclength continuation (Keller) steps
+along the branch's unit tangent ``t`` and corrects by Newton on the square system
+``[F(z); t . (z - z_predicted)] = 0``, whose Jacobian stays regular at a fold, where the
+branch turns back in the parameter: the S-shaped response comes out whole, unstable parts
+included. Components are scaled (x by the start orbit's amplitude, v by w x, V by its
+peak voltage, lam by the range), and the arclength is measured in them.
+
+- **Jacobian.** The monodromy matrix ``M = dP^p/dy`` by perturbed copies (three lanes, as
+  the orbit solver), ``dP^p/dlam`` by one more lane at ``lam + PERTURBATION * range``:
+  every Newton iterate is one engine call of five points.
+- **Steps.** The arclength step grows after an easy correction and shrinks after a hard
+  one, a failed one or a turn of the tangent beyond ``MAX_TURN``: the branch's sharp bend
+  where an orbit starts to touch the stop (a grazing) is passed in small steps, not
+  jumped over.
+- **Bifurcations** between two accepted points are where a test function changes sign:
+  a fold where ``t_lam`` does, period doubling ``det(I + M)``, Neimark-Sacker
+  ``|mu|^2 - 1`` of a complex pair of multipliers, grazing ``x_max - gap``. Each is located
+  by the Illinois method on the arclength between the two points, every trial point
+  corrected onto the branch, until the bracket bounds the parameter to ``LOCATE``
+  relative; the located point joins the branch with its flag.
+- **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
+  from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
+  the period-p orbit along the eigenvector of the multiplier -1.
+- **Error.** Every point is corrected again at twice the steps per period, on the same
+  hyperplane normal to the branch (the coarse Jacobian reused): the change of its metrics
+  is its ``error_estimate``, and the change of the parameter at a located bifurcation the
+  shift of that bifurcation.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _engine
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATE, STATUS
+from .orbits import PERTURBATION, ROUNDING, halving_error
+from .outputs import BIFURCATIONS
+from .packing import check_runnable, pack_parameters, pack_points
+from .parameters import PARAMETERS, ParameterError, resolve_parameters
+from .results import solve
+from .timescales import auto_steps_per_period
+
+D = 3  # components of the period map's state: x [m], v [m/s], V [V]
+#: Newton iterations of one correction before it is given up [-].
+MAX_CORRECTOR = 8
+#: Largest turn of the tangent between two accepted points [rad]: a sharper bend is taken
+#: in shorter steps (and a test function is bracketed by points that see the same branch).
+MAX_TURN = 0.35
+#: Relative precision in the parameter to which a bifurcation is located [-] (the issue
+#: asks for 1e-6; the Illinois method gets there in a few more corrections).
+LOCATE = 1e-8
+#: Corrections the location of one bifurcation may take [-].
+MAX_LOCATE = 60
+#: Samples of the range on which the step per period is chosen [-].
+STEP_SAMPLES = 9
+PERIOD_DOUBLING = ("mark", "switch")
+#: Defaults of the options, each in units of the parameter's range |stop - start|
+#: (step, min_step, max_step) or a count (max_points).
+DEFAULTS = {"step": 0.01, "min_step": 1e-7, "max_step": 0.05, "max_points": 2000}
+
+
+class NoOrbitError(RuntimeError):
+    """The motion from rest at the start value reached no periodic orbit to start from."""
+
+
+@dataclass
+class _Point:
+    """One point of a branch (z scaled, the rest in SI units)."""
+
+    z: np.ndarray  # (y / scale, lam / range)
+    state: np.ndarray  # (4,) the orbit's state at forcing phase 0 (layouts.STATE)
+    metrics: np.ndarray  # engine metric row of the orbit
+    monodromy: np.ndarray  # (3, 3) dP^p/dy
+    jacobian: np.ndarray  # (3, 4) scaled [M - I, dP/dlam]
+    tangent: np.ndarray  # (4,) unit, scaled
+    period: int
+    branch: int
+    lam: float = math.nan  # the parameter [its unit]
+    bifurcation: int = 0
+    arclength: float = 0.0  # from the branch's first point
+    precision: float = 0.0  # half-width of the bracket in the parameter (located points)
+    error: float = math.nan
+    shift: float = math.nan  # parameter change at twice the steps [parameter's unit]
+
+
+@dataclass
+class Branch:
+    """What :func:`continue_branch` found, before it becomes a Dataset."""
+
+    points: list = field(default_factory=list)
+    stops: list = field(default_factory=list)  # why each branch ended
+    steps: int = 0
+    run_time: float = 0.0
+    corrections: int = 0
+
+
+class _Problem:
+    """The period map at any parameter value, scaled, and Newton on it."""
+
+    def __init__(self, base: dict, preset, fixed: dict, parameter: str, lo: float, hi: float,
+                 steps: int, scale: np.ndarray):
+        self.preset, self.fixed, self.parameter = preset, fixed, parameter
+        self.lo, self.hi = lo, hi
+        self.range = hi - lo
+        self.steps = steps
+        self.scale = scale
+        self.gap = base["gap"]
+        self.tolerance = base["settle_tolerance"]
+        self._rows = {}
+        self.calls = 0
+
+    def row(self, lam: float, steps: int) -> np.ndarray:
+        key = (float(lam), steps)
+        if key not in self._rows:
+            with warnings.catch_warnings():  # (the step was checked on the range once)
+                warnings.simplefilter("ignore")
+                p = resolve_parameters(self.preset, **{**self.fixed, self.parameter: key[0],
+                                                       "steps_per_period": steps})
+            self._rows[key] = pack_parameters(p)
+        return self._rows[key]
+
+    def lam(self, z) -> float:
+        return self.lo + z[3] * self.range
+
+    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True):
+        """P^p at z and, with ``jacobian``, the scaled [M - I, dP/dlam]: the end state (4,),
+        the metric row, the monodromy (3, 3) and the scaled Jacobian (3, 4); None where the
+        run diverged or the value is outside the parameter's range."""
+        lam = self.lam(z)
+        dlam = PERTURBATION * self.range
+        try:
+            rows = [self.row(lam, steps)]
+            if jacobian:
+                rows = rows * (D + 1) + [self.row(lam + dlam, steps)]
+        except ParameterError:
+            return None
+        rows = np.array(rows)
+        rows[:, PARAM.max_periods] = period
+        states = np.repeat(carry[None, :], len(rows), axis=0)
+        states[:, :D] = z[:D] * self.scale
+        h = PERTURBATION * self.scale
+        for c in range(D if jacobian else 0):
+            states[c + 1, c] += h[c]
+        metrics = np.empty((len(rows), len(METRIC)))
+        _engine.run_points(rows, states, metrics, np.empty((len(rows), 0, N_STROBE)),
+                           settle=False)
+        self.calls += 1
+        if not (np.all(metrics[:, METRIC.status] != STATUS.diverged)
+                and np.all(np.isfinite(metrics[:, METRIC.power]))
+                and np.all(np.isfinite(states[:, :D]))):
+            return None
+        if not jacobian:
+            return states[0], metrics[0], None, None
+        monodromy = (states[1:D + 1, :D] - states[0, :D]).T / h[None, :]
+        scaled = np.empty((D, D + 1))
+        scaled[:, :D] = monodromy * self.scale[None, :] / self.scale[:, None] - np.eye(D)
+        scaled[:, D] = (states[D + 1, :D] - states[0, :D]) / dlam * self.range / self.scale
+        return states[0], metrics[0], monodromy, scaled
+
+    def correct(self, predicted, tangent, period: int, carry, steps=None, fixed=None):
+        """Newton on [F(z); tangent . (z - predicted)] = 0 from ``predicted``; a _Point
+        (its tangent not yet set), or None when it does not converge. ``fixed``: a scaled
+        Jacobian to reuse for every iterate (quasi-Newton, one lane a run)."""
+        steps = self.steps if steps is None else steps
+        z = predicted.copy()
+        last = math.inf
+        for _ in range(MAX_CORRECTOR):
+            out = self.evaluate(z, period, carry, steps, jacobian=fixed is None)
+            if out is None:
+                return None
+            end, metrics, monodromy, scaled = out
+            if fixed is not None:
+                scaled = fixed
+            a = np.vstack([scaled, tangent])
+            residual = np.concatenate([(end[:D] - z[:D] * self.scale) / self.scale,
+                                       [tangent @ (z - predicted)]])
+            try:
+                step = -np.linalg.solve(a, residual)
+                cond = np.linalg.cond(a, p=np.inf)
+            except np.linalg.LinAlgError:
+                return None
+            size = float(np.max(np.abs(step)))
+            z = z + step
+            if not np.isfinite(size) or size > 0.5 * last and last < math.inf:
+                return None
+            if size <= max(self.tolerance, ROUNDING * cond):
+                state = end.copy()
+                state[:D] = z[:D] * self.scale  # (the fixed point; V_imp carried)
+                return _Point(z, state, metrics, monodromy, scaled, None, period, 0,
+                              self.lam(z))
+            last = size
+            carry = end
+        return None
+
+    def tangent(self, scaled, previous) -> np.ndarray:
+        """The unit null vector of the scaled [M - I, dP/dlam], oriented along
+        ``previous``."""
+        t = np.linalg.solve(np.vstack([scaled, previous]), np.eye(D + 1)[D])
+        return t / np.linalg.norm(t)
+
+    # -- test functions ----------------------------------------------------------------
+
+    def tests(self, point: _Point) -> np.ndarray:
+        """The test function of each bifurcation (outputs.BIFURCATIONS but none) at
+        ``point``."""
+        mult = np.linalg.eigvals(point.monodromy)
+        pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
+        ns = np.abs(mult[pair][0]) ** 2 - 1 if pair.any() else math.nan
+        return np.array([point.tangent[D],
+                         np.linalg.det(np.eye(D) + point.monodromy),
+                         ns,
+                         (point.metrics[METRIC.x_max] - self.gap) / self.scale[0]])
+
+
+def continue_branch(preset: str | None = "paper", parameter: str = "frequency",
+                    start: float | None = None, stop: float | None = None, *,
+                    step: float = DEFAULTS["step"], min_step: float = DEFAULTS["min_step"],
+                    max_step: float = DEFAULTS["max_step"],
+                    max_points: int = DEFAULTS["max_points"], period_doubling: str = "mark",
+                    **parameters):
+    """Follow the branch of periodic orbits reached from rest at ``start`` as
+    ``parameter`` runs to ``stop``, through folds, with its stability and bifurcations.
+
+    Parameters
+    ----------
+    preset : str or None
+        A preset name; ``None`` is the paper's.
+    parameter : str
+        The continued parameter: any numeric model parameter (see ``PARAMETERS``).
+    start, stop : float
+        The range, in the parameter's SI unit; the branch starts at ``start`` and ends
+        where it leaves the range (either end) or after ``max_points``.
+    step, min_step, max_step : float
+        Initial, smallest and largest arclength step [-], relative to the range in the
+        parameter (the state's components scaled alike by the start orbit's amplitudes).
+    max_points : int
+        Budget of points on all branches (located bifurcations included).
+    period_doubling : str
+        ``"mark"`` (locate period doublings) or ``"switch"`` (also continue the doubled
+        branch from each).
+    **parameters
+        Fixed values by name in SI units, as :func:`harvester_sweep.run_scene`. Without
+        ``steps_per_period``, the step is the one the accuracy target asks for at the most
+        demanding of STEP_SAMPLES values across the range, kept along the branch.
+
+    Returns
+    -------
+    xarray.Dataset
+        Along ``point``: the parameter (a variable named after it), the orbits' metrics,
+        Floquet multipliers, ``stable`` and ``bifurcation`` (CF flags), ``branch`` and
+        ``error_estimate``; see :func:`harvester_sweep.datasets.branch_dataset`.
+
+    Raises
+    ------
+    ParameterError
+        For bad input, before any work.
+    NoOrbitError
+        When the motion from rest at ``start`` settles on no periodic orbit.
+    """
+    from .datasets import branch_dataset
+
+    spec = check_continuation(preset, parameter, start, stop, step, min_step, max_step,
+                              max_points, period_doubling, parameters)
+    branch = _continue(**spec)
+    return branch_dataset(branch, spec)
+
+
+def check_continuation(preset, parameter, start, stop, step, min_step, max_step, max_points,
+                       period_doubling, fixed: dict) -> dict:
+    """The checked continuation problem as keyword arguments of :func:`_continue` (bad
+    input raises ParameterError naming it, with its unit and allowed range)."""
+    if not isinstance(parameter, str) or parameter not in PARAMETERS \
+            or PARAMETERS[parameter].kind != "float":
+        floats = [n for n, p in PARAMETERS.items() if p.kind == "float"]
+        raise ParameterError(f"parameter = {parameter!r}: must be a numeric model parameter, "
+                             "one of " + ", ".join(floats))
+    if parameter in fixed:
+        raise ParameterError(f"{parameter}: continued, so it cannot also be fixed; give "
+                             "start and stop instead")
+    spec = PARAMETERS[parameter]
+    ends = {}
+    for name, value in (("start", start), ("stop", stop)):
+        if value is None:
+            raise ParameterError(f"{name} [{spec.unit}]: missing; the continuation runs "
+                                 f"{parameter} from start to stop")
+        try:
+            ends[name] = spec.check(value)
+        except ParameterError as error:
+            raise ParameterError(f"{name}: {error}") from None
+    if ends["start"] == ends["stop"]:
+        raise ParameterError(f"stop [{spec.unit}] = {ends['stop']!r}: must differ from start")
+    for name, value, high in (("step", step, 1.0), ("min_step", min_step, 1.0),
+                              ("max_step", max_step, 1.0)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not 0 < value <= high:
+            raise ParameterError(f"{name} [-] = {value!r}: must be a number in (0, {high:g}] "
+                                 "(relative to |stop - start|)")
+    if not min_step <= step <= max_step:
+        raise ParameterError(f"step [-] = {step!r}: must lie in [min_step, max_step] = "
+                             f"[{min_step!r}, {max_step!r}]")
+    if isinstance(max_points, bool) or not isinstance(max_points, int) \
+            or not 2 <= max_points <= 10**6:
+        raise ParameterError(f"max_points [-] = {max_points!r}: must be an integer in "
+                             "[2, 1000000]")
+    if period_doubling not in PERIOD_DOUBLING:
+        raise ParameterError(f"period_doubling = {period_doubling!r}: must be one of "
+                             + ", ".join(f'"{m}"' for m in PERIOD_DOUBLING))
+    base = resolve_parameters(preset, **fixed, **{parameter: ends["start"]})
+    check_runnable(base)
+    samples = np.linspace(ends["start"], ends["stop"], STEP_SAMPLES)
+    steps = fixed.get("steps_per_period")
+    if steps is None:
+        steps = max(auto_steps_per_period(resolve_parameters(preset, **fixed,
+                                                             **{parameter: float(v)}))
+                    for v in samples)
+    for v in samples:  # (a value too stiff at that step is refused here, not mid-branch)
+        check_runnable(resolve_parameters(preset, **{**fixed, parameter: float(v),
+                                                     "steps_per_period": steps}))
+    return dict(preset=preset, fixed={k: v for k, v in fixed.items()
+                                      if k != "steps_per_period"},
+                parameter=parameter, start=ends["start"], stop=ends["stop"], steps=int(steps),
+                step=float(step), min_step=float(min_step), max_step=float(max_step),
+                max_points=max_points, switch=period_doubling == "switch")
+
+
+def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_step,
+              max_points, switch) -> Branch:
+    """The branch from rest at ``start`` (and, with ``switch``, the doubled branches)."""
+    began = time.perf_counter()
+    p0 = resolve_parameters(preset, **fixed, **{parameter: start, "steps_per_period": steps})
+    _engine.warm_up()
+    results = solve(pack_points([p0]))
+    status = int(results.metrics[0, METRIC.status])
+    if status != STATUS.settled:
+        from .outputs import STATUS_NAMES
+
+        raise NoOrbitError(f"the motion from rest at {parameter} = {start:g} "
+                           f"[{PARAMETERS[parameter].unit}] reached no periodic orbit "
+                           f"({STATUS_NAMES[status]} after "
+                           f"{int(results.metrics[0, METRIC.periods_run])} periods): start "
+                           "where the response settles")
+    m = results.metrics[0]
+    x = max(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]), abs(p0["gap"]))
+    row = pack_parameters(p0)
+    scale = np.array([x, row[PARAM.v_per_x] * x, max(m[METRIC.v_peak],
+                                                       row[PARAM.voltage_per_x] * x)])
+    lo, hi = min(start, stop), max(start, stop)
+    problem = _Problem(p0, preset, fixed, parameter, lo, hi, steps, scale)
+    period = int(m[METRIC.orbit_period])
+    z0 = np.concatenate([results.finals[0, :D] / scale, [(start - lo) / (hi - lo)]])
+    along = np.array([0.0, 0.0, 0.0, 1.0])  # first: the orbit at the start value itself
+    first = problem.correct(z0, along, period, results.finals[0])
+    if first is None:
+        raise NoOrbitError(f"Newton did not converge on the orbit reached from rest at "
+                           f"{parameter} = {start:g} [{PARAMETERS[parameter].unit}]")
+    first.tangent = problem.tangent(first.jacobian, along * np.sign(stop - start))
+    out = Branch()
+    queue = [(first, 0)]
+    while queue and len(out.points) < max_points:
+        head, number = queue.pop(0)
+        head.branch = number
+        found, why = _follow(problem, head, step, min_step, max_step,
+                             max_points - len(out.points))
+        out.points += found
+        out.stops.append(why)
+        if switch:
+            for point in found:
+                if (point.bifurcation == list(BIFURCATIONS).index("period_doubling")
+                        and 2 * point.period <= MAX_ORBIT_PERIOD):
+                    doubled = _doubled(problem, point, step)
+                    if doubled is not None:
+                        queue.append((doubled, len(out.stops) + len(queue)))
+    for point in out.points:
+        _estimate(problem, point)
+    out.run_time = time.perf_counter() - began
+    out.steps = steps
+    out.corrections = problem.calls
+    return out
+
+
+def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
+    """The points of one branch from ``head`` (included) to where it leaves the range,
+    stalls or spends ``budget``; and why it ended."""
+    points = [head]
+    a, ds = head, step
+    while len(points) < budget:
+        predicted = a.z + ds * a.tangent
+        b = problem.correct(predicted, a.tangent, a.period, a.state)
+        if b is not None:
+            b.tangent = problem.tangent(b.jacobian, a.tangent)
+            b.branch = a.branch
+            turn = math.acos(min(1.0, float(a.tangent @ b.tangent)))
+        if b is None or turn > MAX_TURN:
+            ds *= 0.5
+            if ds < min_step:
+                return points, (f"stalled at {problem.parameter} = {problem.lam(a.z):.9g}: "
+                                f"no correction within min_step = {min_step:g}")
+            continue
+        located = []
+        tests_a, tests_b = problem.tests(a), problem.tests(b)
+        for k in range(1, len(BIFURCATIONS)):
+            if tests_a[k - 1] * tests_b[k - 1] < 0:
+                found = _locate(problem, a, b, ds, lambda pt, k=k: problem.tests(pt)[k - 1],
+                                tests_a[k - 1], tests_b[k - 1])
+                if found is not None:
+                    s, point = found
+                    point.bifurcation = k
+                    point.arclength = a.arclength + s
+                    located.append((s, point))
+        lam = problem.lam(b.z)
+        beyond = lam < problem.lo or lam > problem.hi
+        if beyond:  # the branch's end: the point where it leaves the range
+            bound = problem.lo if lam < problem.lo else problem.hi
+            end = _locate(problem, a, b, ds, lambda pt: problem.lam(pt.z) - bound,
+                          problem.lam(a.z) - bound, lam - bound)
+            located = [(s, pt) for s, pt in located if end is None or s < end[0]]
+        located.sort(key=lambda item: item[0])
+        points += [pt for _, pt in located][:budget - len(points)]
+        if beyond:
+            if end is not None and len(points) < budget:
+                end[1].arclength = a.arclength + end[0]
+                points.append(end[1])
+            return points, f"left the range at {problem.parameter} = {bound:.9g}"
+        b.arclength = a.arclength + ds
+        points.append(b)
+        a = b
+        easy = turn < 0.3 * MAX_TURN
+        ds = min(ds * (1.6 if easy else 1.0), max_step) if turn < 0.7 * MAX_TURN else 0.7 * ds
+        ds = max(ds, min_step)
+    return points[:budget], "the budget of points was spent"
+
+
+def _locate(problem: _Problem, a: _Point, b: _Point, ds: float, test, fa: float, fb: float):
+    """The point between ``a`` and ``b`` (``b`` at arclength ``ds`` from ``a``) where
+    ``test`` changes sign, by the Illinois method on the arclength, every trial point
+    corrected onto the branch: ``(s, point)``, or None when a correction fails."""
+    lo, hi = (0.0, fa, a), (ds, fb, b)
+    side = 0
+    best = None
+    for _ in range(MAX_LOCATE):
+        width = problem.range * (hi[0] - lo[0])
+        if width <= LOCATE * max(abs(problem.lam(lo[2].z)), problem.range):
+            break
+        s = (lo[0] * hi[1] - hi[0] * lo[1]) / (hi[1] - lo[1])
+        if not lo[0] < s < hi[0]:
+            s = 0.5 * (lo[0] + hi[0])
+        point = problem.correct(a.z + s * a.tangent, a.tangent, a.period, a.state)
+        if point is None:
+            return None
+        point.tangent = problem.tangent(point.jacobian, a.tangent)
+        point.branch = a.branch
+        f = test(point)
+        best = (s, point)
+        if f == 0:
+            break
+        if np.sign(f) == np.sign(lo[1]):
+            lo = (s, f, point)
+            if side == -1:
+                hi = (hi[0], 0.5 * hi[1], hi[2])
+            side = -1
+        else:
+            hi = (s, f, point)
+            if side == 1:
+                lo = (lo[0], 0.5 * lo[1], lo[2])
+            side = 1
+    if best is None:
+        return None
+    best[1].precision = problem.range * (hi[0] - lo[0])
+    return best
+
+
+def _doubled(problem: _Problem, point: _Point, step: float):
+    """The first point of the period-2p branch born at a period doubling: from the orbit
+    moved along the eigenvector of the multiplier nearest -1."""
+    mult, vectors = np.linalg.eig(point.monodromy)
+    k = int(np.argmin(np.abs(mult + 1)))
+    v = np.real(vectors[:, k]) / problem.scale
+    direction = np.concatenate([v / np.linalg.norm(v), [0.0]])
+    head = problem.correct(point.z + step * direction, direction, 2 * point.period,
+                           point.state)
+    if head is None:
+        return None
+    head.tangent = problem.tangent(head.jacobian, direction)
+    return head
+
+
+def _estimate(problem: _Problem, point: _Point) -> None:
+    """Correct ``point`` again at twice the steps on the hyperplane normal to its tangent
+    (its Jacobian reused): the relative change of its metrics, and of the parameter."""
+    fine = problem.correct(point.z, point.tangent, point.period, point.state,
+                           steps=2 * problem.steps, fixed=point.jacobian)
+    if fine is None:
+        return
+    point.error = float(halving_error(point.metrics, fine.metrics))
+    point.shift = problem.lam(fine.z) - problem.lam(point.z)
+
+
+__all__ = ["Branch", "NoOrbitError", "check_continuation", "continue_branch"]
