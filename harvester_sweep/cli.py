@@ -9,6 +9,8 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from .parameters import (
     PARAMETERS,
     PRESETS,
@@ -66,10 +68,24 @@ def _parser() -> argparse.ArgumentParser:
                        help="run the chunks on a running dask.distributed scheduler, "
                        "e.g. tcp://127.0.0.1:8786")
 
-    plot = sub.add_parser("plot", help="draw a sweep (or scene) netCDF file")
-    plot.add_argument("dataset", metavar="OUT.nc", help="a file written by 'run' or 'scene'")
+    branch = sub.add_parser(
+        "continue", help="follow a branch of periodic orbits in one parameter (TOML)",
+        description="Follow the branch of periodic orbits reached from rest at the start value "
+        "through folds to the stop value, with its stability and located bifurcations (see "
+        "examples/paper_s_curve.toml); the bifurcations are listed on stdout.")
+    branch.add_argument("spec_file", metavar="SPEC.toml", help="the continuation file")
+    branch.add_argument("--output", required=True, metavar="BRANCH.nc",
+                        help="netCDF file to write")
+    branch.add_argument("--plot", metavar="FIG.png", help="draw the branch")
+
+    plot = sub.add_parser("plot", help="draw a sweep, scene or branch netCDF file")
+    plot.add_argument("dataset", metavar="OUT.nc",
+                      help="a file written by 'run', 'scene' or 'continue'")
     plot.add_argument("--output", required=True, metavar="FIG.png",
                       help="figure to write (.png, .pdf or .svg)")
+    plot.add_argument("--over", metavar="SWEEP.nc", action="append", default=[],
+                      help="with a branch: a sweep along the same parameter to draw under it "
+                      "(its up and down directions; repeatable)")
     return parser
 
 
@@ -114,6 +130,8 @@ def _main(args) -> int:
             return _plot(args)
         if args.command == "run":
             return _run(args)
+        if args.command == "continue":
+            return _continue(args)
         return _scene(args)
     except ParameterError as error:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
@@ -230,19 +248,82 @@ _ADVICE = {  # what to do about the points of each status but settled
 }
 
 
-def _plot(args) -> int:
+def _continue(args) -> int:
+    from .branch_file import load_continuation
+    from .continuation import NoOrbitError, continue_branch
+
+    _check_output(args.output, (".nc",))
+    if args.plot is not None:
+        _check_output(args.plot, _FIGURES)
+    spec = load_continuation(args.spec_file)  # bad input: one line, before anything else
+    _announce_compilation()
+    try:
+        ds = continue_branch(**spec)
+    except NoOrbitError as error:
+        print(f"harvester-sweep: error: {error}", file=sys.stderr)
+        return EXIT_DIVERGED
+    print(_bifurcation_table(ds))
+    with _writing(args.output):
+        from .datasets import write_netcdf
+
+        write_netcdf(ds, args.output)
+    if args.plot:
+        from .plots import plot_branch
+
+        with _writing(args.plot):
+            plot_branch(ds, args.plot)
+    return 0
+
+
+def _bifurcation_table(ds) -> str:
+    """The located bifurcations of a branch dataset, one line each."""
+    name = ds.attrs["continued_parameter"]
+    unit = ds[name].attrs["units"]
+    kinds = ds["bifurcation"].attrs["flag_meanings"].split()
+    lines = [f"branch of {name} from {ds.attrs['start']:g} to {ds.attrs['stop']:g} {unit}: "
+             f"{ds.sizes['point']} points in {ds.attrs['run_time']:.3g} s at "
+             f"{ds.attrs['steps_per_period']} steps per period; {ds.attrs['ends']}",
+             "",
+             f"  {'bifurcation':<16} {'branch':>6} {name + ' [' + unit + ']':>18} "
+             f"{'bracket':>9} {'2x steps':>9} {'x_max [m]':>11} {'power [W]':>10}"]
+    for i in np.flatnonzero(ds["bifurcation"].values):
+        lines.append(f"  {kinds[int(ds['bifurcation'][i])]:<16} {int(ds['branch'][i]):>6} "
+                     f"{float(ds[name][i]):>18.10g} {float(ds[name + '_precision'][i]):>9.2g} "
+                     f"{float(ds[name + '_shift'][i]):>+9.2g} {float(ds['x_max'][i]):>11.5g} "
+                     f"{float(ds['power'][i]):>10.4g}")
+    if len(lines) == 3:
+        lines.append("  none located")
+    lines.append(f"  (bracket: width of the interval in {name} that holds it; 2x steps: its "
+                 "shift when solved again at twice the steps per period)")
+    return "\n".join(lines)
+
+
+def _open(path: str):
     import xarray as xr
 
-    from .plots import plot_scene, plot_sweep
-
-    _check_output(args.output, _FIGURES)
     try:
-        ds = xr.open_dataset(args.dataset)
+        return xr.open_dataset(path)
     except (OSError, ValueError) as error:
         why = str(error).splitlines()[0]  # (xarray's own runs over several lines)
-        raise ParameterError(f"{args.dataset}: cannot read it as netCDF ({why})") from None
+        raise ParameterError(f"{path}: cannot read it as netCDF ({why})") from None
+
+
+def _plot(args) -> int:
+    from .plots import plot_branch, plot_scene, plot_sweep
+
+    _check_output(args.output, _FIGURES)
+    ds = _open(args.dataset)
+    sweeps = [_open(path) for path in args.over]
+    if sweeps and "point" not in ds.dims:
+        raise ParameterError("--over: draws sweeps under a branch (a file written by "
+                             "'continue')")
     with ds, _writing(args.output):
-        (plot_scene if "time" in ds.dims else plot_sweep)(ds, args.output)
+        if "point" in ds.dims:
+            plot_branch(ds, args.output, sweeps)
+        else:
+            (plot_scene if "time" in ds.dims else plot_sweep)(ds, args.output)
+    for sweep in sweeps:
+        sweep.close()
     return 0
 
 

@@ -47,7 +47,7 @@ from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATE, STATUS
 from .orbits import PERTURBATION, ROUNDING, halving_error
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
-from .parameters import PARAMETERS, ParameterError, resolve_parameters
+from .parameters import PARAMETERS, ParameterError, check_names, resolve_parameters
 from .results import solve
 from .timescales import auto_steps_per_period
 
@@ -277,44 +277,47 @@ def continue_branch(preset: str | None = "paper", parameter: str = "frequency",
 
 
 def check_continuation(preset, parameter, start, stop, step, min_step, max_step, max_points,
-                       period_doubling, fixed: dict) -> dict:
+                       period_doubling, fixed: dict, prefix: str = "") -> dict:
     """The checked continuation problem as keyword arguments of :func:`_continue` (bad
-    input raises ParameterError naming it, with its unit and allowed range)."""
+    input raises ParameterError naming it, after ``prefix``, with its unit and allowed
+    range)."""
     if not isinstance(parameter, str) or parameter not in PARAMETERS \
             or PARAMETERS[parameter].kind != "float":
         floats = [n for n, p in PARAMETERS.items() if p.kind == "float"]
-        raise ParameterError(f"parameter = {parameter!r}: must be a numeric model parameter, "
+        raise ParameterError(f"{prefix}parameter = {parameter!r}: must be a numeric model parameter, "
                              "one of " + ", ".join(floats))
+    check_names(fixed)
     if parameter in fixed:
         raise ParameterError(f"{parameter}: continued, so it cannot also be fixed; give "
-                             "start and stop instead")
+                             f"{prefix}start and {prefix}stop instead")
     spec = PARAMETERS[parameter]
     ends = {}
     for name, value in (("start", start), ("stop", stop)):
         if value is None:
-            raise ParameterError(f"{name} [{spec.unit}]: missing; the continuation runs "
+            raise ParameterError(f"{prefix}{name} [{spec.unit}]: missing; the continuation runs "
                                  f"{parameter} from start to stop")
         try:
             ends[name] = spec.check(value)
         except ParameterError as error:
-            raise ParameterError(f"{name}: {error}") from None
+            raise ParameterError(f"{prefix}{name}: {error}") from None
     if ends["start"] == ends["stop"]:
-        raise ParameterError(f"stop [{spec.unit}] = {ends['stop']!r}: must differ from start")
+        raise ParameterError(f"{prefix}stop [{spec.unit}] = {ends['stop']!r}: must differ "
+                             "from start")
     for name, value, high in (("step", step, 1.0), ("min_step", min_step, 1.0),
                               ("max_step", max_step, 1.0)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not 0 < value <= high:
-            raise ParameterError(f"{name} [-] = {value!r}: must be a number in (0, {high:g}] "
+            raise ParameterError(f"{prefix}{name} [-] = {value!r}: must be a number in (0, {high:g}] "
                                  "(relative to |stop - start|)")
     if not min_step <= step <= max_step:
-        raise ParameterError(f"step [-] = {step!r}: must lie in [min_step, max_step] = "
+        raise ParameterError(f"{prefix}step [-] = {step!r}: must lie in [min_step, max_step] = "
                              f"[{min_step!r}, {max_step!r}]")
     if isinstance(max_points, bool) or not isinstance(max_points, int) \
             or not 2 <= max_points <= 10**6:
-        raise ParameterError(f"max_points [-] = {max_points!r}: must be an integer in "
+        raise ParameterError(f"{prefix}max_points [-] = {max_points!r}: must be an integer in "
                              "[2, 1000000]")
     if period_doubling not in PERIOD_DOUBLING:
-        raise ParameterError(f"period_doubling = {period_doubling!r}: must be one of "
+        raise ParameterError(f"{prefix}period_doubling = {period_doubling!r}: must be one of "
                              + ", ".join(f'"{m}"' for m in PERIOD_DOUBLING))
     base = resolve_parameters(preset, **fixed, **{parameter: ends["start"]})
     check_runnable(base)

@@ -237,6 +237,7 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
         "range_units": PARAMETERS[parameter].unit,
         "step": spec["step"], "min_step": spec["min_step"], "max_step": spec["max_step"],
         "max_points": spec["max_points"],
+        "steps_per_period": spec["steps"],
         "period_doubling": "switch" if spec["switch"] else "mark",
         "ends": "; ".join(branch.stops),
         "run_time": branch.run_time, "run_time_units": "s",

@@ -83,6 +83,69 @@ def plot_sweep(ds, path=None) -> Figure:
                          "plot draws one or two; select a slice first, e.g. ds.isel(gap=0)")
 
 
+_BIFURCATION_MARKS = {"fold": dict(marker="o", color="C2"),
+                      "period_doubling": dict(marker="s", color="C4"),
+                      "neimark_sacker": dict(marker="D", color="C5"),
+                      "grazing": dict(marker="*", color="C1", ms=10)}
+
+
+def plot_branch(ds, path=None, sweeps=()) -> Figure:
+    """A branch of orbits (``continue_branch``): x_max [m] and power [W] against the
+    continued parameter, stable parts solid, unstable dashed, located bifurcations marked;
+    over the up and down sweeps of ``sweeps`` (sweep datasets along the same parameter),
+    when given.
+
+    Raises
+    ------
+    ParameterError
+        For a sweep that is not along the branch's parameter alone.
+    """
+    axis = ds.attrs["continued_parameter"]
+    fig = Figure(figsize=(8, 7), layout="constrained")
+    panels = fig.subplots(2, 1, sharex=True)
+    lam = ds[axis].values
+    stable = ds["stable"].values.astype(bool)
+    branch = ds["branch"].values
+    flags = ds["bifurcation"].attrs["flag_meanings"].split()
+    for ax, name in zip(panels, ("x_max", "power")):
+        scale, prefix = _prefix(ds[name].values) if name == "x_max" else (1.0, "")
+        y = ds[name].values / scale
+        for sweep in sweeps:
+            dims = [d for d in sweep[name].dims if d != "direction"]
+            if dims != [axis]:
+                raise ParameterError(f"a sweep drawn under a branch must run along {axis} "
+                                     f"alone (it runs along {', '.join(dims)})")
+            for direction in _directions(sweep):
+                values = sweep[name].sel(direction=direction) if direction else sweep[name]
+                style = {**_LINE_STYLES[direction], "ls": "none"}
+                ax.plot(sweep[axis].values, values / scale, ms=4, alpha=0.6,
+                        label=f"sweep {direction or 'from rest'}", **style)
+        # a piece of one branch and one stability, its end shared with the next piece
+        cuts = np.flatnonzero((np.diff(stable.astype(int)) != 0) | (np.diff(branch) != 0)) + 1
+        for start, stop in zip(np.r_[0, cuts], np.r_[cuts, len(lam)]):
+            end = stop + 1 if stop < len(lam) and branch[stop] == branch[start] else stop
+            ax.plot(lam[start:end], y[start:end], color="k", lw=1.2,
+                    ls="-" if stable[start] else "--")
+        ax.plot([], [], color="k", lw=1.2, label="stable")
+        ax.plot([], [], color="k", lw=1.2, ls="--", label="unstable")
+        for k, kind in enumerate(flags[1:], start=1):
+            at = ds["bifurcation"].values == k
+            if at.any():
+                ax.plot(lam[at], y[at], ls="none", label=kind.replace("_", " "),
+                        **{"ms": 7, **_BIFURCATION_MARKS[kind]})
+        if name == "power":
+            ax.set_yscale("log")
+        elif "gap" in ds.attrs:
+            ax.axhline(float(ds.attrs["gap"]) / scale, color="0.2", lw=0.8, ls="-.",
+                       label="stop")
+        ax.set_ylabel(_label(ds, name, prefix))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize="small")
+    panels[-1].set_xlabel(_label(ds, axis))
+    fig.suptitle(_title(ds, [axis]) + f": branch of {axis}")
+    return _save(fig, path)
+
+
 def _save(fig: Figure, path) -> Figure:
     if path is not None:
         fig.savefig(path, dpi=120)

@@ -222,32 +222,19 @@ def load_sweep(source) -> SweepSpec:
     """
     if isinstance(source, SweepSpec):
         return source
-    if isinstance(source, (str, Path)):
-        path = Path(source)
-        try:
-            with path.open("rb") as handle:
-                source = tomllib.load(handle)
-        except OSError as error:
-            raise ParameterError(f"{path}: cannot read the sweep file ({error.strerror})") from None
-        except ValueError as error:  # TOMLDecodeError, bytes not UTF-8, an integer of
-            # over 4300 digits (Python refuses to convert it)
-            raise ParameterError(f"{path}: not valid TOML: {error}") from None
-    if not isinstance(source, dict):
-        raise ParameterError("a sweep is a TOML file path or a dict with keys "
-                             + ", ".join(_TOP_KEYS))
-    _unknown(source, _TOP_KEYS, "")
+    source = read_toml(source, "sweep", _TOP_KEYS)
     preset = source.get("preset", "paper")
-    fixed = dict(_table(source, "parameters"))
+    fixed = dict(table(source, "parameters"))
     check_names(fixed)  # (before the call: `preset` among them would be a TypeError)
     base = resolve_parameters(preset, **fixed)  # bad values, named
     grid, spacing = {}, {}
-    for name, entry in _table(source, "grid").items():
+    for name, entry in table(source, "grid").items():
         grid[name], spacing[name] = _axis(name, entry, fixed)
     if not grid:
         raise ParameterError("grid: give at least one parameter to sweep, e.g. "
                              "frequency = { start = 100, stop = 300, num = 201 }")
-    options = _table(source, "sweep")
-    _unknown(options, _SWEEP_KEYS, "sweep.")
+    options = table(source, "sweep")
+    unknown_keys(options, _SWEEP_KEYS, "sweep.")
     directions = _directions(options, grid)
     if directions:
         grid["frequency"] = np.sort(grid["frequency"])  # "up" means increasing frequency
@@ -276,8 +263,30 @@ def load_sweep(source) -> SweepSpec:
     return spec
 
 
-def _unknown(table: dict, known, prefix: str) -> None:
-    for key in table:
+def read_toml(source, what: str, keys) -> dict:
+    """The table of a TOML file path, or ``source`` itself when it is a dict; its keys
+    among ``keys`` (ParameterError, naming the file or key, otherwise)."""
+    if isinstance(source, (str, Path)):
+        path = Path(source)
+        try:
+            with path.open("rb") as handle:
+                source = tomllib.load(handle)
+        except OSError as error:
+            raise ParameterError(f"{path}: cannot read the {what} file ({error.strerror})") \
+                from None
+        except ValueError as error:  # TOMLDecodeError, bytes not UTF-8, an integer of
+            # over 4300 digits (Python refuses to convert it)
+            raise ParameterError(f"{path}: not valid TOML: {error}") from None
+    if not isinstance(source, dict):
+        raise ParameterError(f"a {what} is a TOML file path or a dict with keys "
+                             + ", ".join(keys))
+    unknown_keys(source, keys, "")
+    return source
+
+
+def unknown_keys(entries: dict, known, prefix: str) -> None:
+    """ParameterError for the first key of ``entries`` not among ``known``."""
+    for key in entries:
         if key not in known:
             raise ParameterError(f"{prefix}{_key(key)}: unknown key; known keys are "
                                  + ", ".join(known))
@@ -289,7 +298,7 @@ def _key(key) -> str:
     return key if isinstance(key, str) and key.isprintable() else value_text(key)
 
 
-def _table(source: dict, key: str) -> dict:
+def table(source: dict, key: str) -> dict:
     value = source.get(key, {})
     if not isinstance(value, dict):
         raise ParameterError(f"{key}: must be a table, e.g. [{key}]")
@@ -333,7 +342,7 @@ def _axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
 
 def _range(key: str, entry: dict) -> np.ndarray:
     """Values of a range table ``{start, stop, num, scale}``."""
-    _unknown(entry, _RANGE_KEYS, f"{key}.")
+    unknown_keys(entry, _RANGE_KEYS, f"{key}.")
     for part in ("start", "stop", "num"):
         if part not in entry:
             raise ParameterError(f"{key}.{part}: missing; a range is "
