@@ -6,6 +6,7 @@ the command line. The registry of outputs (``outputs``) names every metric and s
 """
 
 from .basins import basin_fractions
+from .continuation import NoOrbitError, continue_branch
 from .outputs import OUTPUTS, STATUSES
 from .parameters import PARAMETERS, PRESETS, ParameterError, TooStiffError, resolve_parameters
 from .scene import SceneResult, run_scene
@@ -19,12 +20,14 @@ __all__ = [
     "PARAMETERS",
     "PRESETS",
     "STATUSES",
+    "NoOrbitError",
     "ParameterError",
     "SceneResult",
     "SweepSpec",
     "TooStiffError",
     "__version__",
     "basin_fractions",
+    "continue_branch",
     "load_sweep",
     "resolve_parameters",
     "run_scene",

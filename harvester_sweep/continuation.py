@@ -27,10 +27,11 @@ peak voltage, lam by the range), and the arclength is measured in them.
 - **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
   from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
   the period-p orbit along the eigenvector of the multiplier -1.
-- **Error.** Every point is corrected again at twice the steps per period, on the same
-  hyperplane normal to the branch (the coarse Jacobian reused): the change of its metrics
-  is its ``error_estimate``, and the change of the parameter at a located bifurcation the
-  shift of that bifurcation.
+- **Error.** Every point is corrected again at twice the steps per period (the coarse
+  Jacobian reused): at its own parameter value, the change of its metrics is its
+  ``error_estimate`` (near a fold, where that orbit may not exist, it is taken normal to
+  the branch); normal to the branch, the change of the parameter is the point's shift,
+  at a fold the fold's.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ import numpy as np
 
 from . import _engine
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATE, STATUS
+from .linear import linear_response
 from .orbits import PERTURBATION, ROUNDING, halving_error
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
@@ -60,10 +62,15 @@ MAX_TURN = 0.35
 #: Relative precision in the parameter to which a bifurcation is located [-] (the issue
 #: asks for 1e-6; the Illinois method gets there in a few more corrections).
 LOCATE = 1e-8
+#: A bifurcation located again within this distance of one already on the branch
+#: (scaled components) means the branch has come round a loop [-].
+REVISIT = 1e-6
 #: Corrections the location of one bifurcation may take [-].
 MAX_LOCATE = 60
 #: Samples of the range on which the step per period is chosen [-].
 STEP_SAMPLES = 9
+#: ... and on which the closed-form amplitude without the stop is looked at [-].
+SCALE_SAMPLES = 201
 PERIOD_DOUBLING = ("mark", "switch")
 #: Defaults of the options, each in units of the parameter's range |stop - start|
 #: (step, min_step, max_step) or a count (max_points).
@@ -133,10 +140,12 @@ class _Problem:
     def lam(self, z) -> float:
         return self.lo + z[3] * self.range
 
-    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True):
+    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True,
+                 strobes=None):
         """P^p at z and, with ``jacobian``, the scaled [M - I, dP/dlam]: the end state (4,),
         the metric row, the monodromy (3, 3) and the scaled Jacobian (3, 4); None where the
-        run diverged or the value is outside the parameter's range."""
+        run diverged or the value is outside the parameter's range. ``strobes``, when
+        given, (1, p, 3) receives the states y(T) .. y(pT) of the unperturbed run."""
         lam = self.lam(z)
         dlam = PERTURBATION * self.range
         try:
@@ -153,8 +162,10 @@ class _Problem:
         for c in range(D if jacobian else 0):
             states[c + 1, c] += h[c]
         metrics = np.empty((len(rows), len(METRIC)))
-        _engine.run_points(rows, states, metrics, np.empty((len(rows), 0, N_STROBE)),
-                           settle=False)
+        samples = np.empty((len(rows), 0 if strobes is None else strobes.shape[1], N_STROBE))
+        _engine.run_points(rows, states, metrics, samples, settle=False)
+        if strobes is not None:
+            strobes[:] = samples[:1]
         self.calls += 1
         if not (np.all(metrics[:, METRIC.status] != STATUS.diverged)
                 and np.all(np.isfinite(metrics[:, METRIC.power]))
@@ -355,6 +366,12 @@ def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_
                            "where the response settles")
     m = results.metrics[0]
     x = max(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]), abs(p0["gap"]))
+    # without a stop within reach the amplitude is the closed form's: scaled by its peak
+    # over the range, a resonance is not taken in hundreds of steps of the amplitude
+    free = [abs(linear_response(**resolve_parameters(preset, **{**fixed, parameter: float(v)}))[0])
+            for v in np.linspace(start, stop, SCALE_SAMPLES)]
+    if p0["hertz_stiffness"] == 0 or max(free) < p0["gap"]:
+        x = max(x, max(free))
     row = pack_parameters(p0)
     scale = np.array([x, row[PARAM.v_per_x] * x, max(m[METRIC.v_peak],
                                                        row[PARAM.voltage_per_x] * x)])
@@ -397,6 +414,10 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
     stalls or spends ``budget``; and why it ended."""
     points = [head]
     a, ds = head, step
+    phases = np.empty((1, head.period, N_STROBE))  # the head's orbit at its p phases
+    problem.evaluate(head.z, head.period, head.state, problem.steps, False, phases)
+    phases = np.concatenate([phases[0] / problem.scale,
+                             np.full((head.period, 1), head.z[D])], axis=1)
     while len(points) < budget:
         predicted = a.z + ds * a.tangent
         b = problem.correct(predicted, a.tangent, a.period, a.state)
@@ -429,7 +450,14 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
                           problem.lam(a.z) - bound, lam - bound)
             located = [(s, pt) for s, pt in located if end is None or s < end[0]]
         located.sort(key=lambda item: item[0])
+        again = [pt for _, pt in located if any(
+            q.bifurcation == pt.bifurcation and np.max(np.abs(q.z - pt.z)) < REVISIT
+            for q in points)]
         points += [pt for _, pt in located][:budget - len(points)]
+        if again:  # (a loop whose phases the chord test missed: it came back to a point)
+            kind = list(BIFURCATIONS)[again[0].bifurcation]
+            return points, (f"closed on itself: back at the {kind} "
+                            f"at {problem.parameter} = {problem.lam(again[0].z):.9g}")
         if beyond:
             if end is not None and len(points) < budget:
                 end[1].arclength = a.arclength + end[0]
@@ -437,11 +465,22 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
             return points, f"left the range at {problem.parameter} = {bound:.9g}"
         b.arclength = a.arclength + ds
         points.append(b)
+        if b.arclength > 4 * ds and any(_passes(phase, a.z, b.z) for phase in phases):
+            return points, (f"closed on itself at {problem.parameter} = "
+                            f"{problem.lam(b.z):.9g} (an isola or a loop)")
         a = b
         easy = turn < 0.3 * MAX_TURN
         ds = min(ds * (1.6 if easy else 1.0), max_step) if turn < 0.7 * MAX_TURN else 0.7 * ds
         ds = max(ds, min_step)
     return points[:budget], "the budget of points was spent"
+
+
+def _passes(head, a, b) -> bool:
+    """Whether the chord from ``a`` to ``b`` passes by ``head`` (within a tenth of its
+    length): the branch has come back to its first orbit (at any of its phases)."""
+    chord = b - a
+    t = np.clip((head - a) @ chord / (chord @ chord), 0.0, 1.0)
+    return bool(np.linalg.norm(a + t * chord - head) <= 0.1 * np.linalg.norm(chord))
 
 
 def _locate(problem: _Problem, a: _Point, b: _Point, ds: float, test, fa: float, fb: float):
@@ -499,14 +538,20 @@ def _doubled(problem: _Problem, point: _Point, step: float):
 
 
 def _estimate(problem: _Problem, point: _Point) -> None:
-    """Correct ``point`` again at twice the steps on the hyperplane normal to its tangent
-    (its Jacobian reused): the relative change of its metrics, and of the parameter."""
-    fine = problem.correct(point.z, point.tangent, point.period, point.state,
+    """Correct ``point`` again at twice the steps (its Jacobian reused): at the same
+    parameter value for the relative change of its metrics (what a designer at that value
+    gets wrong), or, where that does not converge (near a fold the orbit at twice the steps
+    may not exist there), normal to the branch; normal to the branch also for the change
+    of the parameter (at a fold, the fold's shift)."""
+    normal = problem.correct(point.z, point.tangent, point.period, point.state,
+                             steps=2 * problem.steps, fixed=point.jacobian)
+    if normal is not None:
+        point.shift = problem.lam(normal.z) - problem.lam(point.z)
+    fine = problem.correct(point.z, np.eye(D + 1)[D], point.period, point.state,
                            steps=2 * problem.steps, fixed=point.jacobian)
-    if fine is None:
-        return
-    point.error = float(halving_error(point.metrics, fine.metrics))
-    point.shift = problem.lam(fine.z) - problem.lam(point.z)
+    fine = normal if fine is None else fine
+    if fine is not None:
+        point.error = float(halving_error(point.metrics, fine.metrics))
 
 
 __all__ = ["Branch", "NoOrbitError", "check_continuation", "continue_branch"]

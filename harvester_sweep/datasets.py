@@ -171,9 +171,10 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
     ``spec`` is the checked problem (continuation.check_continuation). Variables: the
     continued parameter (named after it, in its unit), the engine's metrics but
     ``status`` and ``periods_run``, ``error_estimate``, the Floquet multipliers and
-    ``spectral_radius``, ``stable``, ``bifurcation`` (CF flags), ``branch`` and
-    ``arclength``; global attributes: the fixed parameters with their units, the
-    continuation's range and options, why each branch ended and the run time [s].
+    ``spectral_radius``, ``stable``, ``bifurcation`` (CF flags), ``branch``,
+    ``arclength`` and the orbit's state at forcing phase 0; global attributes: the fixed
+    parameters with their units, the continuation's range and options, why each branch
+    ended and the run time [s].
     """
     from .outputs import ENGINE_METRICS
 
@@ -195,6 +196,8 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
         "bifurcation": np.array([pt.bifurcation for pt in points]),
         "branch": np.array([pt.branch for pt in points]),
         "arclength": np.array([pt.arclength for pt in points]),
+        **{name: np.array([pt.state[k] for pt in points]) for k, name in enumerate(
+            ("orbit_displacement", "orbit_velocity", "orbit_voltage"))},
     }
     for k, name in enumerate(ENGINE_METRICS):
         if name not in ("status", "periods_run"):
@@ -207,8 +210,8 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
         attrs = output.attrs
         if name == "error_estimate":
             attrs = {**attrs, "comment": "the point corrected again at twice the steps per "
-                                         "period on the hyperplane normal to the branch; "
-                                         + output.comment}
+                                         "period at the same parameter value (near a fold, "
+                                         "normal to the branch); " + output.comment}
         data[name] = (("point",) + output.dims, value.astype(output.dtype), attrs)
     shift = np.array([pt.shift for pt in points])
     data[f"{parameter}_shift"] = ("point", shift, {

@@ -430,8 +430,9 @@ class _Points:
         self._estimate(est)
         self._finish(t[~self.estimated[t]])
         # not taken: integrate on for about the periods the motion needs to come NEAR
-        hint = np.ceil(p[~taken] * np.log(NEAR / (2 * d0[~taken]))
-                       / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
+        with np.errstate(divide="ignore"):  # (d0 = 0: no hint, below)
+            hint = np.ceil(p[~taken] * np.log(NEAR / (2 * d0[~taken]))
+                           / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
         self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > NEAR), hint, 0)
         self._give_up(idx[~taken])
 

@@ -167,6 +167,12 @@ _OUTPUTS = (
     Output("arclength", "1", "pseudo-arclength from the branch's first point, in the "
            "scaled components (x, v, V by the start orbit's amplitudes, the parameter by "
            "the range)", where="branch"),
+    Output("orbit_displacement", "m", "tip displacement x on the orbit at forcing phase 0 "
+           "(t = nT): where the branch's period map is solved", where="branch"),
+    Output("orbit_velocity", "m/s", "tip velocity dx/dt on the orbit at forcing phase 0",
+           where="branch"),
+    Output("orbit_voltage", "V", "voltage across the load V on the orbit at forcing phase 0",
+           where="branch"),
     # a sweep's stroboscopic samples and a scene's recorded orbit
     Output("strobe_displacement", "m", "tip displacement x at the last forcing period "
            "boundaries y(nT)", where="sweep"),

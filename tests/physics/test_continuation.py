@@ -1,0 +1,164 @@
+"""Branches of orbits followed through folds (harvester_sweep.continuation), against
+independent references.
+
+- the linear harvester (no stop): no bifurcation anywhere, x_max the closed-form phasor's
+  |X| within the error estimate, and the multipliers, to RK4's error, the eigenvalues of
+  the exact flow's exp(A T) (A the system matrix of docs/model.md, SciPy's expm);
+- the paper scene at 1 um, followed down from 300 Hz: the linear orbit grazes the stop
+  where the closed form's |X(f)| equals the gap (brentq), the small-impact branch born
+  there folds just below it, and the S-curve's upper fold follows;
+- each located fold lies between the last point on its branch and the first off it in
+  fine up and down sweeps (the lane engine's continuation at the same step);
+- the multipliers of stable and unstable points match the SciPy period-map reference of
+  tests/helpers.py, which has a multiplier +1 at each located fold.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.optimize import brentq
+
+from harvester_sweep import continue_branch, resolve_parameters, run_sweep
+from harvester_sweep.outputs import BIFURCATIONS
+from tests.helpers import period_map_jacobian, phasor
+
+FOLD, GRAZING = list(BIFURCATIONS).index("fold"), list(BIFURCATIONS).index("grazing")
+GAP = 1e-6
+
+
+@pytest.fixture(scope="module")
+def s_curve():
+    """The paper scene's branch at 1 um from the linear orbit at 300 Hz down to 200 Hz."""
+    return continue_branch("paper", "frequency", 300.0, 200.0, gap=GAP)
+
+
+def located(ds, kind):
+    return ds["frequency"].values[ds["bifurcation"].values == kind]
+
+
+def system_matrix(p):
+    """d(x, v, V)/dt = A (x, v, V) + forcing, without the stop (docs/model.md)."""
+    m, wn = p["mass"], 2 * math.pi * p["natural_frequency"]
+    theta, cp, r = p["coupling"], p["capacitance"], p["resistance"]
+    return np.array([[0.0, 1.0, 0.0],
+                     [-wn * wn, -2 * p["damping_ratio"] * wn, theta / m],
+                     [0.0, -theta / cp, -1 / (r * cp)]])
+
+
+def test_linear_branch_matches_closed_form():
+    """No stop: no fold across the resonance, |X| and exp(A T) at every point."""
+    ds = continue_branch("paper", "frequency", 120.0, 200.0, gap=GAP, hertz_stiffness=0.0)
+    f = ds["frequency"].values
+    assert f.min() == pytest.approx(120.0) and f.max() == pytest.approx(200.0)
+    assert np.all(np.diff(f) > 0), "a linear response has no fold"
+    assert not ds["bifurcation"].values.any() and ds["stable"].values.all()
+    p = resolve_parameters("paper", gap=GAP)
+    X = np.array([abs(phasor(**{**p, "frequency": fk})[0]) for fk in f])
+    # within the step-halving estimate of every point (the automatic step without a stop
+    # is coarse: 64 steps per period)
+    error = ds["error_estimate"].values
+    assert np.all(np.abs(ds["x_max"].values / X - 1) < 2 * error + 1e-9)
+    assert np.all(error < 1e-4)
+    engine = ds["floquet_multipliers_real"].values + 1j * ds["floquet_multipliers_imag"].values
+    a = system_matrix(p)
+    for k in range(0, len(f), max(1, len(f) // 10)):
+        # the exact flow's, to RK4's error at 64 steps (measured 1.2e-5 at 120 Hz)
+        mu_exact = np.linalg.eigvals(expm(a / f[k]))
+        for mu in engine[k]:  # each engine multiplier has its exact one
+            assert np.min(np.abs(mu_exact - mu)) < 1e-4 * max(abs(mu), 1e-3), (
+                f[k], engine[k], mu_exact)
+
+
+def test_grazing_of_the_linear_branch_is_the_closed_form(s_curve):
+    p = resolve_parameters("paper", gap=GAP)
+    closed = brentq(lambda f: abs(phasor(**{**p, "frequency": f})[0]) - GAP, 205.0, 300.0,
+                    xtol=1e-10)
+    grazings = located(s_curve, GRAZING)
+    assert grazings.size == 1
+    assert grazings[0] == pytest.approx(closed, rel=1e-6)
+    # the small-impact branch born there folds just below it, then the S-curve's top fold
+    folds = located(s_curve, FOLD)
+    assert folds.size == 2
+    assert closed - 1.0 < folds[0] < closed < folds[1]
+    # stable on the linear branch, unstable between the folds, stable again on top
+    stable = s_curve["stable"].values
+    i0, i1 = np.flatnonzero(s_curve["bifurcation"].values == FOLD)
+    assert stable[:i0 - 1].all() and not stable[i0 + 1:i1].any() and stable[i1 + 1:].all()
+    # every point is estimated; away from the folds (where the response at one frequency
+    # is sensitive to anything) to the accuracy target's order
+    error = s_curve["error_estimate"].values
+    f = s_curve["frequency"].values
+    assert np.all(np.isfinite(error))
+    away = np.min(np.abs(f[:, None] - folds[None, :]), axis=1) > 0.5
+    assert np.all(error[away] < 1e-6), error[away].max()
+
+
+def test_folds_lie_between_jumps_of_fine_sweeps(s_curve):
+    """Up (down) at 0.01 Hz near each fold, the same step: the last point on the upper
+    (lower) branch lies before the fold and the first off it after."""
+    low, high = located(s_curve, FOLD)
+    steps = int(s_curve.attrs["steps_per_period"])
+    fine = np.concatenate([np.arange(-0.2, 0.2, 0.01) + round(high, 2) + 0.005,
+                           np.arange(-0.2, 1.0, 0.01) + round(low, 2) + 0.005])
+    # coarser elsewhere; but a sweep's point starts from the orbit of the one before, and
+    # near the grazing (218.68 Hz) a jump of 1 Hz lands on the upper branch
+    coarse = np.concatenate([np.arange(round(low, 2) + 1.1, 222.0, 0.1),
+                             np.arange(222.0, 301.0, 1.0)]).tolist()
+    ds = run_sweep({"preset": "paper",
+                    "parameters": {"gap": GAP, "steps_per_period": steps, "max_periods": 20000},
+                    "grid": {"frequency": sorted(coarse + fine.tolist())},
+                    "sweep": {"directions": ["up", "down"], "outputs": ["x_max"],
+                              "error_estimate": "none"}}, progress=False)
+    f = ds["frequency"].values
+    for direction, fold, window in (("up", high, (250.0, 265.0)), ("down", low, (215.0, 225.0))):
+        x = ds["x_max"].sel(direction=direction).values
+        inside = (f > window[0]) & (f < window[1])
+        upper = x > 1.1 * GAP
+        jump = np.flatnonzero(np.diff(upper[inside]))
+        assert jump.size == 1, (direction, x[inside])
+        before, after = f[inside][jump[0]], f[inside][jump[0] + 1]
+        # (a sweep may leave a branch a step early: near a fold its basin shrinks like the
+        # root of the distance, and a step of 0.01 Hz is a kick; measured at the lower
+        # fold, 218.5834 Hz: the sweep jumps between 218.595 and 218.585)
+        early = 0.01 if direction == "down" else 0.0
+        assert before < fold + early and fold < after + early, (direction, before, fold,
+                                                                after)
+        assert np.all(ds["status"].sel(direction=direction).values == 0)
+
+
+def reference_multipliers(s_curve, k):
+    point = s_curve.isel(point=k)
+    p = resolve_parameters("paper", gap=GAP, frequency=float(point["frequency"]),
+                           steps_per_period=int(s_curve.attrs["steps_per_period"]))
+    y = [float(point[n]) for n in ("orbit_displacement", "orbit_velocity", "orbit_voltage")]
+    return np.linalg.eigvals(period_map_jacobian(p, y)[1])
+
+
+@pytest.mark.parametrize("where", ["upper", "middle"])
+def test_multipliers_match_the_scipy_reference(s_curve, where):
+    """At 245 Hz on the stable upper and on the unstable middle branch the engine's
+    multipliers are the reference's (measured: 6e-6 and 2e-5 relative)."""
+    f = s_curve["frequency"].values
+    i0, i1 = np.flatnonzero(s_curve["bifurcation"].values == FOLD)
+    part = np.arange(i1 + 1, len(f)) if where == "upper" else np.arange(i0 + 1, i1)
+    k = part[np.argmin(np.abs(f[part] - 245.0))]
+    reference = reference_multipliers(s_curve, k)
+    point = s_curve.isel(point=k)
+    engine = (point["floquet_multipliers_real"].values
+              + 1j * point["floquet_multipliers_imag"].values)
+    for mu in engine:
+        assert np.min(np.abs(reference - mu)) < 1e-4 * max(abs(mu), 1e-2), (where, engine,
+                                                                          reference)
+    radius = np.abs(reference).max()
+    assert (radius < 1) == (where == "upper") == bool(point["stable"])
+
+
+def test_located_folds_have_a_multiplier_one_in_the_reference(s_curve):
+    """At each located fold the reference's period map has a multiplier +1: measured
+    1.0036 at the lower fold (3.5 nm into the stop, where the multipliers of the points
+    0.0005 Hz to either side have moduli 0.96 and 1.58) and 0.99995 at the upper."""
+    for k in np.flatnonzero(s_curve["bifurcation"].values == FOLD):
+        reference = reference_multipliers(s_curve, k)
+        assert np.min(np.abs(reference - 1.0)) < 1e-2, reference
