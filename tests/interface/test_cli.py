@@ -99,3 +99,61 @@ def test_a_step_beyond_the_stability_bound_warns_once_per_run(tmp_path, capsys):
     assert err.count("estimated RK4 stability bound") == 1
     more = [line for line in err.splitlines() if "more parameter sets" in line]
     assert len(more) == 1 and int(more[0].split("and ")[1].split()[0]) >= 7
+
+
+S_CURVE = """preset = "paper"
+[parameters]
+gap = 1e-6
+[continuation]
+parameter = "frequency"
+start = 300.0
+stop = 210.0
+"""
+
+
+def test_continue_writes_the_branch_lists_its_bifurcations_and_plots_it(tmp_path, capsys):
+    """From the linear orbit at 300 Hz down to 210 Hz: the grazing and both folds, a CF
+    file, and the branch drawn over a sweep along the same axis."""
+    spec, nc, png = tmp_path / "s.toml", tmp_path / "branch.nc", tmp_path / "branch.png"
+    spec.write_text(S_CURVE)
+    assert main(["continue", str(spec), "--output", str(nc)]) == 0
+    out = capsys.readouterr().out
+    rows = [line.split() for line in out.splitlines() if line.startswith("  ")]
+    kinds = [row[0] for row in rows if row[0] in ("fold", "grazing")]
+    assert kinds == ["grazing", "fold", "fold"], out
+    with xr.open_dataset(nc) as ds:
+        assert ds["frequency"].attrs["units"] == "Hz"
+        flags = ds["bifurcation"].attrs
+        assert flags["flag_meanings"].split() == ["none", "fold", "period_doubling",
+                                                  "neimark_sacker", "grazing"]
+        assert list(flags["flag_values"]) == [0, 1, 2, 3, 4]
+        for name, var in ds.data_vars.items():
+            assert "units" in var.attrs and "long_name" in var.attrs, name
+        assert ds["frequency"].min() == pytest.approx(210.0)
+    sweep = tmp_path / "sweep.nc"
+    (tmp_path / "sweep.toml").write_text(
+        'preset = "paper"\n[parameters]\ngap = 1e-6\nsteps_per_period = 512\n'
+        '[grid]\nfrequency = { start = 240, stop = 300, num = 7 }\n'
+        '[sweep]\ndirections = ["up", "down"]\noutputs = ["x_max", "power"]\n')
+    assert main(["run", str(tmp_path / "sweep.toml"), "--output", str(sweep), "--quiet"]) == 0
+    assert main(["plot", str(nc), "--over", str(sweep), "--output", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("table, words", [
+    ("start = 300.0", ["continuation.stop", "missing"]),
+    ('start = 300.0\nstop = 240.0\nparameter = "contact_law"', ["continuation.parameter"]),
+    ("start = 300.0\nstop = 240.0\nstep = 2.0", ["continuation.step", "(0, 1]"]),
+    ("start = 300.0\nstop = -1.0", ["continuation.stop", "frequency", "Hz"]),
+    ("start = 300.0\nstop = 240.0\nbudget = 3", ["continuation.budget", "unknown"]),
+    ('start = 300.0\nstop = 240.0\nperiod_doubling = "follow"', ["period_doubling"]),
+])
+def test_bad_continuation_files_exit_2_with_one_line(tmp_path, table, words, capsys):
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'preset = "paper"\n[continuation]\n{table}\n')
+    assert main(["continue", str(spec), "--output", str(tmp_path / "b.nc")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("harvester-sweep: error:"), err
+    for word in words:
+        assert word in err, err
+    assert not (tmp_path / "b.nc").exists()
