@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _engine
-from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATE, STATUS
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATUS
 from .linear import linear_response
 from .orbits import PERTURBATION, ROUNDING, halving_error
 from .outputs import BIFURCATIONS
@@ -65,6 +65,8 @@ LOCATE = 1e-8
 #: A bifurcation located again within this distance of one already on the branch
 #: (scaled components) means the branch has come round a loop [-].
 REVISIT = 1e-6
+#: Packed rows kept for parameter values already visited [-].
+ROW_CACHE = 4096
 #: Corrections the location of one bifurcation may take [-].
 MAX_LOCATE = 60
 #: Samples of the range on which the step per period is chosen [-].
@@ -129,6 +131,8 @@ class _Problem:
 
     def row(self, lam: float, steps: int) -> np.ndarray:
         key = (float(lam), steps)
+        if len(self._rows) > ROW_CACHE:  # (a long branch visits ever new values)
+            self._rows.clear()
         if key not in self._rows:
             with warnings.catch_warnings():  # (the step was checked on the range once)
                 warnings.simplefilter("ignore")

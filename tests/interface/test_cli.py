@@ -10,7 +10,7 @@ import xarray as xr
 
 from harvester_sweep import PARAMETERS
 from harvester_sweep.cli import main
-from harvester_sweep.outputs import OUTPUTS, SCENE_OUTPUTS
+from harvester_sweep.outputs import SCENE_OUTPUTS
 
 JSON_KEYS = {"power", "v_rms", "v_peak", "power_peak", "x_max", "x_min", "contact_force_max",
              "impacts_per_period", "approach_velocity", "orbit_period", "converged",
