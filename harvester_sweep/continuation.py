@@ -46,7 +46,8 @@ import numpy as np
 from . import _engine
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATUS
 from .linear import linear_response
-from .orbits import PERTURBATION, ROUNDING, halving_error
+from .orbits import (PERTURBATION, ROUNDING, halving_error, monodromy, orbit_scales,
+                     perturbed_copies)
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PARAMETERS, ParameterError, check_names, resolve_parameters
@@ -100,6 +101,7 @@ class _Point:
     arclength: float = 0.0  # from the branch's first point
     precision: float = 0.0  # half-width of the bracket in the parameter (located points)
     error: float = math.nan
+    tested: np.ndarray = None  # the test functions, once computed (see _Problem.tests)
     shift: float = math.nan  # parameter change at twice the steps [parameter's unit]
 
 
@@ -109,9 +111,7 @@ class Branch:
 
     points: list = field(default_factory=list)
     stops: list = field(default_factory=list)  # why each branch ended
-    steps: int = 0
     run_time: float = 0.0
-    corrections: int = 0
 
 
 class _Problem:
@@ -127,7 +127,6 @@ class _Problem:
         self.gap = base["gap"]
         self.tolerance = base["settle_tolerance"]
         self._rows = {}
-        self.calls = 0
 
     def row(self, lam: float, steps: int) -> np.ndarray:
         key = (float(lam), steps)
@@ -160,28 +159,27 @@ class _Problem:
             return None
         rows = np.array(rows)
         rows[:, PARAM.max_periods] = period
-        states = np.repeat(carry[None, :], len(rows), axis=0)
-        states[:, :D] = z[:D] * self.scale
-        h = PERTURBATION * self.scale
-        for c in range(D if jacobian else 0):
-            states[c + 1, c] += h[c]
+        state = carry.copy()
+        state[:D] = z[:D] * self.scale
+        states = perturbed_copies(state[None, :], self.scale[None, :]) if jacobian \
+            else state[None, :]
+        states = np.concatenate([states, states[:1]])[:len(rows)]  # (the lane at lam + dlam)
         metrics = np.empty((len(rows), len(METRIC)))
         samples = np.empty((len(rows), 0 if strobes is None else strobes.shape[1], N_STROBE))
         _engine.run_points(rows, states, metrics, samples, settle=False)
         if strobes is not None:
             strobes[:] = samples[:1]
-        self.calls += 1
         if not (np.all(metrics[:, METRIC.status] != STATUS.diverged)
                 and np.all(np.isfinite(metrics[:, METRIC.power]))
                 and np.all(np.isfinite(states[:, :D]))):
             return None
         if not jacobian:
             return states[0], metrics[0], None, None
-        monodromy = (states[1:D + 1, :D] - states[0, :D]).T / h[None, :]
+        m = monodromy(states[None, :D + 1], self.scale[None, :])[0]
         scaled = np.empty((D, D + 1))
-        scaled[:, :D] = monodromy * self.scale[None, :] / self.scale[:, None] - np.eye(D)
+        scaled[:, :D] = m * self.scale[None, :] / self.scale[:, None] - np.eye(D)
         scaled[:, D] = (states[D + 1, :D] - states[0, :D]) / dlam * self.range / self.scale
-        return states[0], metrics[0], monodromy, scaled
+        return states[0], metrics[0], m, scaled
 
     def correct(self, predicted, tangent, period: int, carry, steps=None, fixed=None):
         """Newton on [F(z); tangent . (z - predicted)] = 0 from ``predicted``; a _Point
@@ -228,14 +226,17 @@ class _Problem:
 
     def tests(self, point: _Point) -> np.ndarray:
         """The test function of each bifurcation (outputs.BIFURCATIONS but none) at
-        ``point``."""
+        ``point`` (kept on it: each point is compared with both its neighbours)."""
+        if point.tested is not None:
+            return point.tested
         mult = np.linalg.eigvals(point.monodromy)
         pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
         ns = np.abs(mult[pair][0]) ** 2 - 1 if pair.any() else math.nan
-        return np.array([point.tangent[D],
-                         np.linalg.det(np.eye(D) + point.monodromy),
-                         ns,
-                         (point.metrics[METRIC.x_max] - self.gap) / self.scale[0]])
+        point.tested = np.array([point.tangent[D],
+                                 np.linalg.det(np.eye(D) + point.monodromy),
+                                 ns,
+                                 (point.metrics[METRIC.x_max] - self.gap) / self.scale[0]])
+        return point.tested
 
 
 def continue_branch(preset: str | None = "paper", parameter: str = "frequency",
@@ -376,9 +377,7 @@ def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_
             for v in np.linspace(start, stop, SCALE_SAMPLES)]
     if p0["hertz_stiffness"] == 0 or max(free) < p0["gap"]:
         x = max(x, max(free))
-    row = pack_parameters(p0)
-    scale = np.array([x, row[PARAM.v_per_x] * x, max(m[METRIC.v_peak],
-                                                       row[PARAM.voltage_per_x] * x)])
+    scale = orbit_scales(pack_parameters(p0), x, m[METRIC.v_peak])
     lo, hi = min(start, stop), max(start, stop)
     problem = _Problem(p0, preset, fixed, parameter, lo, hi, steps, scale)
     period = int(m[METRIC.orbit_period])
@@ -408,8 +407,6 @@ def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_
     for point in out.points:
         _estimate(problem, point)
     out.run_time = time.perf_counter() - began
-    out.steps = steps
-    out.corrections = problem.calls
     return out
 
 

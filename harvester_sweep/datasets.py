@@ -176,15 +176,13 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
     parameters with their units, the continuation's range and options, why each branch
     ended and the run time [s].
     """
+    from .orbits import sorted_multipliers
     from .outputs import ENGINE_METRICS
 
     points = branch.points
     parameter = spec["parameter"]
     lam = np.array([pt.lam for pt in points])
-    mult = np.full((len(points), 3), np.nan + 0j)
-    for i, pt in enumerate(points):
-        values = np.linalg.eigvals(pt.monodromy)
-        mult[i] = values[np.argsort(-np.abs(values), kind="stable")]
+    mult = sorted_multipliers(np.array([pt.monodromy for pt in points]))
     radius = np.abs(mult[:, 0])
     metrics = np.array([pt.metrics for pt in points])
     values = {

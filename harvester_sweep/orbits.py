@@ -158,6 +158,38 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     return pts.result(samples)
 
 
+def orbit_scales(rows, x, v_peak):
+    """Component scales [m, m/s, V] of orbits of displacement amplitude ``x`` [m] and
+    peak voltage ``v_peak`` [V] (packed rows (..., len(PARAM))): x, w x, and the larger of
+    v_peak and the voltage of that amplitude."""
+    return np.stack([x, rows[..., PARAM.v_per_x] * x,
+                     np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)], axis=-1)
+
+
+def perturbed_copies(states, scale):
+    """Each state (n, 4) and D copies moved by PERTURBATION of ``scale`` (n, 3) along
+    each component: (n * (D + 1), 4), the copies of a state after it."""
+    n = len(states)
+    out = np.repeat(states, D + 1, axis=0).reshape(n, D + 1, states.shape[1])
+    for c in range(D):
+        out[:, c + 1, c] += PERTURBATION * scale[:, c]
+    return out.reshape(-1, states.shape[1])
+
+
+def monodromy(ends, scale):
+    """The monodromy matrices (n, 3, 3) by forward differences from the end states
+    (n, D + 1, >= 3) of the runs of :func:`perturbed_copies` with the same ``scale``."""
+    h = PERTURBATION * scale
+    return (ends[:, 1:, :D] - ends[:, :1, :D]).transpose(0, 2, 1) / h[:, None, :]
+
+
+def sorted_multipliers(jacobians):
+    """Floquet multipliers (n, 3) of monodromy matrices (n, 3, 3), largest modulus first."""
+    mult = np.linalg.eigvals(jacobians)
+    order = np.argsort(-np.abs(mult), axis=-1, kind="stable")
+    return np.take_along_axis(mult, order, axis=-1)
+
+
 def _norm(d, scale):
     """Largest component of ``d`` (..., 3) relative to ``scale`` (..., 3)."""
     return np.max(np.abs(d) / scale, axis=-1)
@@ -224,9 +256,7 @@ class _Points:
         return self._scales(x, 0.0)
 
     def _scales(self, x, v_peak, index=slice(None)):
-        r = self.rows[index]
-        return np.stack([x, r[:, PARAM.v_per_x] * x,
-                         np.maximum(v_peak, r[:, PARAM.voltage_per_x] * x)], axis=-1)
+        return orbit_scales(self.rows[index], x, v_peak)
 
     def start(self, idx):
         """Points ``idx`` start: refused ones are done at once (their state passes on)."""
@@ -258,7 +288,8 @@ class _Points:
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
         owners = np.concatenate([np.repeat(newton, D + 1), transient, estimate])
         rows = self.rows[owners].copy()
-        states = np.concatenate([self._copies(newton), self.traj[transient], self.y[estimate]])
+        states = np.concatenate([perturbed_copies(self.y[newton], self.scale[newton]),
+                                 self.traj[transient], self.y[estimate]])
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
         k = len(newton) * (D + 1)
@@ -281,14 +312,6 @@ class _Points:
         j = slice(k + len(transient), None)
         self._after_estimate(estimate, metrics[j], states[j])
         return int((self.phase == _DONE).sum()) - before
-
-    def _copies(self, idx):
-        """The Newton iterate of each point and D copies moved by PERTURBATION along each
-        component: (len(idx) * (D + 1), 4)."""
-        out = np.repeat(self.y[idx], D + 1, axis=0).reshape(len(idx), D + 1, len(STATE))
-        for c in range(D):
-            out[:, c + 1, c] += PERTURBATION * self.scale[idx, c]
-        return out.reshape(-1, len(STATE))
 
     # -- Newton ------------------------------------------------------------------------
 
@@ -319,8 +342,7 @@ class _Points:
         scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, 0, METRIC.v_peak], 1.0),
                              idx)
         scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
-        h = PERTURBATION * self.scale[idx]
-        jac = (f[:, 1:, :D] - f[:, :1, :D]).transpose(0, 2, 1) / h[:, None, :]
+        jac = monodromy(f, self.scale[idx])
         residual = centre[:, :D] - y
         step = np.zeros_like(residual)
         cond = np.full(len(idx), np.inf)
@@ -574,9 +596,7 @@ class _Points:
         metrics[:, METRIC.periods_run] = self.run
         multipliers = np.full((n, D), np.nan + 0j)
         if settled.any():
-            mult = np.linalg.eigvals(self.jacobian[settled])
-            order = np.argsort(-np.abs(mult), axis=1, kind="stable")
-            multipliers[settled] = np.take_along_axis(mult, order, axis=1)
+            multipliers[settled] = sorted_multipliers(self.jacobian[settled])
         strobes = np.full((n, samples, D), np.nan)
         age = np.arange(samples)[::-1]  # periods before the end
         # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
@@ -631,4 +651,5 @@ def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
     ])
 
 
-__all__ = ["Orbits", "halving_error", "solve_orbits"]
+__all__ = ["Orbits", "halving_error", "monodromy", "orbit_scales", "perturbed_copies",
+           "solve_orbits", "sorted_multipliers"]
