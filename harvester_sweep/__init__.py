@@ -5,7 +5,7 @@ the engine (``_engine``, private) -> results -> datasets (xarray, CF netCDF) -> 
 the command line. The registry of outputs (``outputs``) names every metric and status.
 """
 
-from .basins import basin_fractions
+from .basins import basin_fractions, basin_map
 from .continuation import NoOrbitError, continue_branch
 from .outputs import OUTPUTS, STATUSES
 from .parameters import PARAMETERS, PRESETS, ParameterError, TooStiffError, resolve_parameters
@@ -27,6 +27,7 @@ __all__ = [
     "TooStiffError",
     "__version__",
     "basin_fractions",
+    "basin_map",
     "continue_branch",
     "load_sweep",
     "resolve_parameters",

@@ -1,29 +1,47 @@
 """Basins of coexisting attractors: which steady state does the harvester land on?
 
 Where orbits coexist (the stop's hysteresis band), the state the device starts from decides
-which one it reaches. :func:`basin_fractions` draws initial states uniformly from a box
-around rest, solves each to its steady state with the periodic-orbit solver (every start
-one point of the lane engine), and groups them by attractor: the same orbit period, and a
-final state within ``TOLERANCE`` of one of the orbit's stroboscopic states (a period-p
-orbit is reached at any of its p phases). The fraction of starts that reach an attractor
-estimates the share of the box its basin holds, with a binomial standard error.
+which one it reaches. Starts are drawn in one of two ways:
+
+- **a box** (the default): states drawn uniformly from a box around rest, at t = 0;
+- **a base shock** of a given size: the device runs on the orbit it reaches from rest, and
+  at a moment drawn uniformly over that orbit the base's velocity jumps by ``shock``
+  [m/s], up or down with equal odds. An impulse moves no mass, so the tip keeps its place
+  and its absolute velocity: its velocity relative to the base jumps by ``-shock`` or
+  ``+shock``, and the voltage is unchanged. The start is that state, at that moment's
+  forcing phase (the step boundary of the RK4 orbit the moment falls on).
+
+Each start is solved to its steady state by the periodic-orbit solver (every start one
+point of the lane engine), and the starts are grouped by attractor: the same orbit period,
+and a final state within ``TOLERANCE`` of one of the orbit's p states at the same forcing
+phase (a period-p orbit is reached at any of its p phases). The fraction of starts that
+reach an attractor estimates the share of its basin among the starts, with a binomial
+standard error.
+
+:func:`basin_fractions` does this at one point, :func:`basin_map` at every point of a
+grid, with the same draws at every point: the differences between neighbouring points are
+then the physics, not the luck of different draws.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
+import sys
 from dataclasses import fields, replace
 
 import numpy as np
 import xarray as xr
+from tqdm import tqdm
 
-from ._engine import MAX_ORBIT_PERIOD, METRIC, STATUS
-from .datasets import run_attributes
+from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, STATE, STATUS, record_series
+from .datasets import grid_coordinates, run_attributes
 from .linear import linear_response
 from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
-from .parameters import ParameterError, resolve_parameters
+from .parameters import PRESET_NOTES, ParameterError, is_number, resolve_parameters
 from .results import solve
+from .sweep_file import axis
 
 #: Two final states belong to one attractor when they differ by less than this, relative to
 #: the largest stroboscopic amplitude of each component over the starts [-]. Orbits are
@@ -35,18 +53,26 @@ TOLERANCE = 1e-6
 BOX = {"x": "m", "v": "m/s", "voltage": "V"}
 BOX_SIZE = 2.0
 MAX_SAMPLES = 1_000_000
+#: Starts handed to one solve: bounds the memory of a map (about 2 kB a start); the
+#: numbers do not depend on it, as a point's result never depends on the other points.
+CALL_STARTS = 8192
+#: What each attractor reports beside its basin fraction (the metrics of the first start
+#: that reached it).
+ATTRACTOR_OUTPUTS = ("orbit_period", "power", "v_peak", "x_max", "x_min",
+                     "impacts_per_period", "contact_force_max", "spectral_radius")
 
 
 def basin_fractions(preset: str | None = "paper", samples: int = 1000, seed: int = 0,
-                    box: dict | None = None, **parameters) -> xr.Dataset:
-    """The attractors reached from ``samples`` initial states, and each one's share.
+                    box: dict | None = None, shock: float | None = None,
+                    **parameters) -> xr.Dataset:
+    """The attractors reached from ``samples`` starts at one point, and each one's share.
 
     Parameters
     ----------
     preset : str or None
         A preset name; ``None`` is the paper's.
     samples : int
-        Initial states drawn, 1 to 1,000,000.
+        Starts drawn, 1 to 1,000,000.
     seed : int
         Seed of numpy's default generator (>= 0): the same seed gives the same starts and
         the same numbers on any thread count.
@@ -54,6 +80,9 @@ def basin_fractions(preset: str | None = "paper", samples: int = 1000, seed: int
         Half-widths of the box of starts around rest: ``x`` [m], ``v`` [m/s], ``voltage``
         [V], each > 0 (default: BOX_SIZE times the larger of the gap and the stop-free
         amplitude, and the velocity and voltage of that amplitude).
+    shock : float, optional
+        Instead of a box: the size of a base shock [m/s] (> 0), a jump of the base's
+        velocity at a random moment of the orbit reached from rest (module docstring).
     **parameters
         Overrides by name in SI units, as :func:`harvester_sweep.run_scene`.
 
@@ -62,104 +91,230 @@ def basin_fractions(preset: str | None = "paper", samples: int = 1000, seed: int
     xarray.Dataset
         Along ``attractor`` (most frequent first): ``basin_fraction`` [1] and its
         ``basin_fraction_error`` [1], and each attractor's metrics and Floquet spectral
-        radius (of the first start that reached it); ``fraction_not_settled`` and
-        ``fraction_diverged`` [1] for the starts that reached no orbit. The orbits are
-        solved at the point's step with no error estimate: the attractors are told apart,
-        not polished.
+        radius (of the first start that reached it); ``impact_basin_fraction`` [1] (the
+        starts that reach an orbit striking the stop) with its error;
+        ``fraction_not_settled`` and ``fraction_diverged`` [1] for the starts that reached
+        no orbit. The orbits are solved at the point's step with no error estimate: the
+        attractors are told apart, not polished.
 
     Raises
     ------
     ParameterError
-        For a parameter, ``samples``, ``seed`` or ``box`` out of range, before any work.
+        For a parameter, ``samples``, ``seed``, ``box`` or ``shock`` out of range, before
+        any work.
     """
+    return basin_map({}, preset, samples, seed, box, shock, progress=False, **parameters)
+
+
+def basin_map(grid: dict, preset: str | None = "paper", samples: int = 200, seed: int = 0,
+              box: dict | None = None, shock: float | None = None, *, progress: bool = True,
+              **parameters) -> xr.Dataset:
+    """:func:`basin_fractions` at every point of a grid, with the same draws at each.
+
+    Parameters
+    ----------
+    grid : dict
+        One axis per parameter name: a list of values [SI] or a range table ``{"start",
+        "stop", "num", "scale"}``, as a sweep file's ``[grid]``.
+    preset, samples, seed, box, shock, **parameters
+        As :func:`basin_fractions`; ``box`` and ``shock`` apply at every point (the default
+        box is each point's own).
+    progress : bool
+        A progress bar of the starts solved on stderr, when it is a terminal.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions: the grid's axes (coordinates in SI units), then ``attractor`` (at each
+        point most frequent first, padded with NaN, and orbit_period 0, to the largest
+        count). Variables as :func:`basin_fractions`; ``impact_basin_fraction`` is the map
+        designers look at.
+    """
+    samples, seed, box, shock = check_draws(samples, seed, box, shock)
+    base = resolve_parameters(preset, **parameters)
+    axes, spacing = {}, {}
+    for name, entry in grid.items():
+        axes[name], spacing[name] = axis(name, entry, parameters)
+    points = [resolve_parameters(preset, **parameters, **dict(zip(axes, values)))
+              for values in itertools.product(*(a.tolist() for a in axes.values()))]
+    for p in points:
+        check_runnable(p)
+    halves = [_box(p, box) for p in points] if shock is None else None
+    found = _solve(points, samples, seed, halves, shock, progress)
+
+    shape = tuple(len(a) for a in axes.values())
+    dims = tuple(axes) + ("attractor",)
+    width = max(len(f["basin_fraction"]) for f in found)
+
+    def per_point(name):
+        values = np.array([f[name] for f in found]).reshape(shape)
+        return tuple(axes), values, OUTPUTS[name].attrs
+
+    def per_attractor(name, pad):
+        output = OUTPUTS[name]
+        values = np.full((len(found), width), pad, dtype=output.dtype)
+        for i, f in enumerate(found):
+            values[i, :len(f[name])] = f[name]
+        return dims, values.reshape(shape + (width,)), output.attrs
+
+    data = {name: per_attractor(name, 0 if name == "orbit_period" else np.nan)
+            for name in ("basin_fraction", "basin_fraction_error") + ATTRACTOR_OUTPUTS}
+    data.update({name: per_point(name) for name in (
+        "impact_basin_fraction", "impact_basin_fraction_error", "fraction_not_settled",
+        "fraction_diverged")})
+    coords = {"attractor": ("attractor", np.arange(1, width + 1), {
+        "long_name": "attractor, most frequent first", "units": "1"}),
+        **grid_coordinates(axes, spacing)}
+    fixed = {name: value for name, value in base.items() if name not in axes}
+    if shock is None:
+        given = dict(zip(BOX, halves[0])) if not axes else box or {}
+        starts = {"starts": "uniform in a box around rest at t = 0, of half-widths box_* "
+                            "(unset: each point's default)",
+                  **{f"box_{name}": float(h) for name, h in given.items()},
+                  "box_units": ", ".join(f"box_{name}: {u}" for name, u in BOX.items())}
+    else:
+        starts = {"starts": "base shock at a uniform moment of the orbit reached from rest",
+                  "shock": shock, "shock_units": "m/s"}
+    ds = xr.Dataset(data, coords=coords, attrs={
+        **run_attributes(fixed, PRESET_NOTES.get(preset or "paper", [])),
+        "title": "harvester_sweep basins of attraction of a piezoelectric harvester with a "
+                 "Hertz stop",
+        "preset": preset or "paper", "grid_axes": " ".join(axes), "samples": samples,
+        "seed": seed, **starts})
+    return ds
+
+
+def check_draws(samples, seed, box, shock):
+    """The draw options, checked (ParameterError naming the one out of range)."""
     if isinstance(samples, bool) or not isinstance(samples, int) \
             or not 1 <= samples <= MAX_SAMPLES:
         raise ParameterError(f"samples [-] = {samples!r}: must be an integer in 1 .. "
                              f"{MAX_SAMPLES:,}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ParameterError(f"seed [-] = {seed!r}: must be an integer >= 0")
-    p = resolve_parameters(preset, **parameters)
-    check_runnable(p)
-    half = _box(p, box)
-    starts = np.random.default_rng(seed).uniform(-1.0, 1.0, (samples, 3)) * half
-    one = pack_points([p])
-    packed = replace(one, **{f.name: np.repeat(getattr(one, f.name), samples, axis=0)
-                             for f in fields(one)})
-    packed.states[:, :3] = starts
-    results = solve(packed, samples=MAX_ORBIT_PERIOD)
-    status = results.metrics[:, METRIC.status]
-    members = _group(results)
-    first = np.array([m[0] for m in members], dtype=int)
-    fraction = np.array([len(m) for m in members], dtype=float) / samples
-
-    def per_attractor(name, values):
-        return ("attractor",), values[first].astype(OUTPUTS[name].dtype), OUTPUTS[name].attrs
-
-    ds = xr.Dataset(
-        {
-            "basin_fraction": (("attractor",), fraction, OUTPUTS["basin_fraction"].attrs),
-            "basin_fraction_error": (("attractor",), np.sqrt(fraction * (1 - fraction)
-                                                              / samples),
-                                     OUTPUTS["basin_fraction_error"].attrs),
-            **{name: per_attractor(name, results.metrics[:, metric_index(name)])
-               for name in ("orbit_period", "power", "v_peak", "x_max", "x_min",
-                            "impacts_per_period", "contact_force_max")},
-            "spectral_radius": per_attractor("spectral_radius",
-                                             results.run_outputs()["spectral_radius"]),
-            "fraction_not_settled": ((), np.mean(status == STATUS.not_settled),
-                                     OUTPUTS["fraction_not_settled"].attrs),
-            "fraction_diverged": ((), np.mean(status == STATUS.diverged),
-                                  OUTPUTS["fraction_diverged"].attrs),
-        },
-        coords={"attractor": ("attractor", np.arange(1, len(members) + 1),
-                              {"long_name": "attractor, most frequent first", "units": "1"})},
-        attrs={**run_attributes(p, []), "samples": samples, "seed": seed,
-               **{f"box_{name}": float(h) for name, h in zip(BOX, half)},
-               "box_units": ", ".join(f"box_{name}: {u}" for name, u in BOX.items())},
-    )
-    return ds
+    if shock is not None:
+        if box is not None:
+            raise ParameterError("box and shock: give one, the starts are drawn from a box "
+                                 "or left by a base shock")
+        if not is_number(shock) or not 0 < shock < math.inf:
+            raise ParameterError(f"shock [m/s] = {shock!r}: must be a number > 0 and finite")
+        shock = float(shock)
+    if box is not None:
+        if not isinstance(box, dict):
+            raise ParameterError(f"box = {box!r}: must be a table of half-widths "
+                                 + ", ".join(f"{k} [{u}]" for k, u in BOX.items()))
+        for name, value in box.items():
+            if name not in BOX:
+                raise ParameterError(f"box.{name}: unknown; must be among "
+                                     + ", ".join(f'"{k}"' for k in BOX))
+            if not is_number(value) or not 0 < value < math.inf:
+                raise ParameterError(f"box.{name} [{BOX[name]}] = {value!r}: must be a "
+                                     "number > 0 and finite")
+    return samples, seed, box, shock
 
 
 def _box(p: dict, box: dict | None) -> np.ndarray:
-    """Half-widths of the box of starts [m, m/s, V]."""
+    """Half-widths of the box of starts [m, m/s, V]: ``box``'s, else the point's default."""
     X, V = linear_response(**p)
     x = BOX_SIZE * max(abs(complex(X)), abs(p["gap"]))
     w = 2 * math.pi * p["frequency"]
     half = np.array([x, w * x, x * abs(complex(V)) / max(abs(complex(X)), 1e-300)])
     for name, value in (box or {}).items():
-        if name not in BOX:
-            raise ParameterError(f"box.{name}: unknown; must be among "
-                                 + ", ".join(f'"{k}"' for k in BOX))
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not 0 < value < math.inf:
-            raise ParameterError(f"box.{name} [{BOX[name]}] = {value!r}: must be a number "
-                                 "> 0 and finite")
         half[list(BOX).index(name)] = value
     return half
 
 
-def _group(results) -> list:
-    """The starts of each attractor (index arrays, most frequent first): settled starts
-    with the same orbit period whose final state lies within TOLERANCE of one of the
-    stroboscopic states of the group's first start."""
-    status = results.metrics[:, METRIC.status]
-    period = results.metrics[:, METRIC.orbit_period].astype(int)
+def _solve(points, samples, seed, halves, shock, progress) -> list:
+    """Every point's attractors (dicts of :func:`_attractors`), ``samples`` starts each."""
+    draws = np.random.default_rng(seed)
+    if shock is None:
+        unit = draws.uniform(-1.0, 1.0, (samples, 3))
+    else:
+        when = draws.random(samples)  # the moment, as a fraction of the orbit
+        sign = np.where(draws.random(samples) < 0.5, -1.0, 1.0)
+    per_call = max(1, CALL_STARTS // samples)
+    found = []
+    with tqdm(total=len(points) * samples, unit="start", desc="basins", smoothing=0.1,
+              disable=not progress or not sys.stderr.isatty()) as bar:
+        for first in range(0, len(points), per_call):
+            chunk = points[first:first + per_call]
+            one = pack_points(chunk)
+            packed = replace(one, **{f.name: np.repeat(getattr(one, f.name), samples, axis=0)
+                                     for f in fields(one)})
+            if shock is None:
+                packed.states[:, :3] = (unit[None] * np.array(halves[first:first + per_call])
+                                        [:, None]).reshape(-1, 3)
+            else:
+                packed.rows[:, PARAM.phase], packed.states[:] = _shocked(one, when, sign,
+                                                                         shock)
+            results = solve(packed, samples=MAX_ORBIT_PERIOD, on_points=bar.update)
+            for i in range(len(chunk)):
+                part = slice(i * samples, (i + 1) * samples)
+                found.append(_attractors(results, part, packed.rows[part]))
+    return found
+
+
+def _shocked(one, when, sign, shock):
+    """Forcing phases [rad] (n * samples,) and states (n * samples, 4) a base shock leaves
+    on the orbit each point of ``one`` reaches from rest (the state the motion reached,
+    where it reaches none)."""
+    rest = solve(one, samples=MAX_ORBIT_PERIOD)
+    phases, states = [], []
+    for i, row in enumerate(one.rows):
+        n = int(row[PARAM.steps])
+        period = max(int(rest.metrics[i, METRIC.orbit_period]), 1)
+        orbit = record_series(row, rest.finals[i], period)
+        step = np.minimum((when * period * n).astype(np.int64), period * n - 1)
+        state = np.repeat(rest.finals[i][None], len(when), axis=0)
+        state[:, :3] = orbit[step, :3]
+        state[:, STATE.v] -= sign * shock  # the tip's velocity relative to the base
+        phases.append(2.0 * math.pi * (step % n) / n)
+        states.append(state)
+    return np.concatenate(phases), np.concatenate(states)
+
+
+def _attractors(results, part: slice, rows: np.ndarray) -> dict:
+    """The attractors reached by the starts ``part`` of ``results`` (one point's, of
+    parameter rows ``rows``): basin fractions and metrics, most frequent first."""
+    metrics, finals = results.metrics[part], results.finals[part]
+    samples = len(metrics)
+    status = metrics[:, METRIC.status]
+    period = metrics[:, METRIC.orbit_period].astype(int)
+    n = int(rows[0, PARAM.steps])
+    section = np.rint(rows[:, PARAM.phase] / (2.0 * math.pi) * n).astype(np.int64)
     left = np.flatnonzero(status == STATUS.settled)
-    if not left.size:
-        return []
-    strobes = results.strobes  # (n, MAX_ORBIT_PERIOD, 3): the orbit repeated
-    scale = np.max(np.abs(strobes[left]), axis=(0, 1)) + 1e-300
+    scale = np.max(np.abs(results.strobes[part][left]), axis=(0, 1)) + 1e-300 \
+        if left.size else None
     groups = []
     while left.size:
         head = left[0]
-        orbit = strobes[head, -period[head]:]  # its p states
-        distance = np.min(np.max(np.abs(results.finals[left, None, :3] - orbit[None]) / scale,
-                                 axis=2), axis=1)
-        member = (period[left] == period[head]) & (distance <= TOLERANCE)
+        p = period[head]
+        orbit = record_series(rows[head], finals[head], p)[:, :3]
+        # the orbit's p states at the forcing phase of each start left
+        at = (section[left] - section[head]) % n
+        states = orbit[at[:, None] + n * np.arange(p)[None, :]]
+        distance = np.min(np.max(np.abs(finals[left, None, :3] - states) / scale, axis=2),
+                          axis=1)
+        member = (period[left] == p) & (distance <= TOLERANCE)
         member[0] = True  # (the head always leaves, whatever rounding says)
         groups.append(left[member])
         left = left[~member]
-    return sorted(groups, key=len, reverse=True)
+    groups.sort(key=len, reverse=True)
+    first = np.array([g[0] for g in groups], dtype=int)
+    fraction = np.array([len(g) for g in groups], dtype=float) / samples
+    impacts = metrics[first, METRIC.impacts_per_period] if groups else np.empty(0)
+    impact = float(fraction[impacts > 0].sum())
+    found = {"basin_fraction": fraction,
+             "basin_fraction_error": np.sqrt(fraction * (1 - fraction) / samples),
+             "impact_basin_fraction": impact,
+             "impact_basin_fraction_error": math.sqrt(impact * (1 - impact) / samples),
+             "fraction_not_settled": float(np.mean(status == STATUS.not_settled)),
+             "fraction_diverged": float(np.mean(status == STATUS.diverged))}
+    radius = results.run_outputs()["spectral_radius"][part]
+    for name in ATTRACTOR_OUTPUTS:
+        found[name] = (radius if name == "spectral_radius"
+                       else metrics[:, metric_index(name)])[first]
+    return found
 
 
-__all__ = ["basin_fractions"]
+__all__ = ["basin_fractions", "basin_map"]

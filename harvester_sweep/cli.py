@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import json
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -78,9 +79,21 @@ def _parser() -> argparse.ArgumentParser:
                         help="netCDF file to write")
     branch.add_argument("--plot", metavar="FIG.png", help="draw the branch")
 
-    plot = sub.add_parser("plot", help="draw a sweep, scene or branch netCDF file")
+    basins = sub.add_parser(
+        "basins", help="which coexisting orbit the device lands on, over a grid (TOML)",
+        description="Solve many starts (a box around rest, or the states a base shock leaves) "
+        "at every grid point to their attractors and write each attractor's basin fraction "
+        "(see examples/paper_basins.toml); a summary goes to stdout.")
+    basins.add_argument("spec_file", metavar="SPEC.toml", help="the basin file")
+    basins.add_argument("--output", required=True, metavar="BASINS.nc",
+                        help="netCDF file to write")
+    basins.add_argument("--plot", metavar="FIG.png",
+                        help="draw the impact basin fraction over the grid")
+    basins.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    plot = sub.add_parser("plot", help="draw a sweep, scene, branch or basins netCDF file")
     plot.add_argument("dataset", metavar="OUT.nc",
-                      help="a file written by 'run', 'scene' or 'continue'")
+                      help="a file written by 'run', 'scene', 'continue' or 'basins'")
     plot.add_argument("--output", required=True, metavar="FIG.png",
                       help="figure to write (.png, .pdf or .svg)")
     plot.add_argument("--over", metavar="SWEEP.nc", action="append", default=[],
@@ -132,6 +145,8 @@ def _main(args) -> int:
             return _run(args)
         if args.command == "continue":
             return _continue(args)
+        if args.command == "basins":
+            return _basins(args)
         return _scene(args)
     except ParameterError as error:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
@@ -275,6 +290,57 @@ def _continue(args) -> int:
     return 0
 
 
+def _basins(args) -> int:
+    from .basin_file import load_basins
+    from .basins import basin_map
+
+    _check_output(args.output, (".nc",))
+    if args.plot is not None:
+        _check_output(args.plot, _FIGURES)
+    spec = load_basins(args.spec_file)  # bad input: one line, before anything else
+    _announce_compilation()
+    start = time.perf_counter()
+    ds = basin_map(**spec, progress=not args.quiet)
+    print(_basin_summary(ds, time.perf_counter() - start))
+    with _writing(args.output):
+        from .datasets import write_netcdf
+
+        write_netcdf(ds, args.output)
+    if args.plot:
+        from .plots import plot_basins
+
+        with _writing(args.plot):
+            plot_basins(ds, args.plot)
+    return 0
+
+
+def _basin_summary(ds, seconds: float) -> str:
+    """What a basin run found: per attractor at one point, the range of the map else."""
+    axes = ds.attrs["grid_axes"].split()
+    points = int(np.prod([ds.sizes[a] for a in axes]))
+    lines = [f"{points} point(s) x {ds.attrs['samples']} starts ({ds.attrs['starts']}) in "
+             f"{seconds:.3g} s"]
+    impact = ds["impact_basin_fraction"].values
+    if axes:
+        lines.append(f"  impact_basin_fraction: {np.nanmin(impact):.3g} to "
+                     f"{np.nanmax(impact):.3g}; up to {ds.sizes['attractor']} attractors at "
+                     "a point")
+    else:
+        lines.append(f"  {'attractor':>9} {'basin_fraction':>16} {'orbit_period':>12} "
+                     f"{'impacts_per_period':>18} {'power [W]':>10} {'x_max [m]':>10}")
+        for k in range(ds.sizes["attractor"]):
+            a = ds.isel(attractor=k)
+            lines.append(f"  {k + 1:>9} {float(a.basin_fraction):>8.3f} +- "
+                         f"{float(a.basin_fraction_error):<5.3f} {int(a.orbit_period):>12} "
+                         f"{float(a.impacts_per_period):>18.3g} {float(a.power):>10.4g} "
+                         f"{float(a.x_max):>10.4g}")
+    lost = float(np.nanmax(ds["fraction_not_settled"].values + ds["fraction_diverged"].values))
+    if lost > 0:
+        lines.append(f"  up to {lost:.3g} of a point's starts reached no orbit (not settled "
+                     "or diverged)")
+    return "\n".join(lines)
+
+
 def _bifurcation_table(ds) -> str:
     """The located bifurcations of a branch dataset, one line each."""
     name = ds.attrs["continued_parameter"]
@@ -309,7 +375,7 @@ def _open(path: str):
 
 
 def _plot(args) -> int:
-    from .plots import plot_branch, plot_scene, plot_sweep
+    from .plots import plot_basins, plot_branch, plot_scene, plot_sweep
 
     _check_output(args.output, _FIGURES)
     ds = _open(args.dataset)
@@ -320,6 +386,8 @@ def _plot(args) -> int:
     with ds, _writing(args.output):
         if "point" in ds.dims:
             plot_branch(ds, args.output, sweeps)
+        elif "attractor" in ds.dims:
+            plot_basins(ds, args.output)
         else:
             (plot_scene if "time" in ds.dims else plot_sweep)(ds, args.output)
     for sweep in sweeps:

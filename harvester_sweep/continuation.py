@@ -300,8 +300,8 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
     if not isinstance(parameter, str) or parameter not in PARAMETERS \
             or PARAMETERS[parameter].kind != "float":
         floats = [n for n, p in PARAMETERS.items() if p.kind == "float"]
-        raise ParameterError(f"{prefix}parameter = {parameter!r}: must be a numeric model parameter, "
-                             "one of " + ", ".join(floats))
+        raise ParameterError(f"{prefix}parameter = {parameter!r}: must be a numeric model "
+                             "parameter, one of " + ", ".join(floats))
     check_names(fixed)
     if parameter in fixed:
         raise ParameterError(f"{parameter}: continued, so it cannot also be fixed; give "
@@ -323,8 +323,8 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
                               ("max_step", max_step, 1.0)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not 0 < value <= high:
-            raise ParameterError(f"{prefix}{name} [-] = {value!r}: must be a number in (0, {high:g}] "
-                                 "(relative to |stop - start|)")
+            raise ParameterError(f"{prefix}{name} [-] = {value!r}: must be a number in "
+                                 f"(0, {high:g}] (relative to |stop - start|)")
     if not min_step <= step <= max_step:
         raise ParameterError(f"{prefix}step [-] = {step!r}: must lie in [min_step, max_step] = "
                              f"[{min_step!r}, {max_step!r}]")

@@ -91,11 +91,7 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
         for col, name in enumerate(STROBES):  # (the columns of a chunk's strobe)
             data[name] = variable(strobe[..., col], OUTPUTS[name].attrs, extra=("sample",))
 
-    coords = dict(MULTIPLIER)
-    for name, values in spec.grid.items():
-        unit = PARAMETERS[name].unit
-        coords[name] = (name, values, {"units": unit, "long_name": PARAMETERS[name].description,
-                                       "grid_spacing": spec.spacing[name]})
+    coords = {**MULTIPLIER, **grid_coordinates(spec.grid, spec.spacing)}
     if spec.continuation:
         coords["direction"] = ("direction", list(spec.directions), {
             "long_name": "direction of the frequency continuation: each point starts from the "
@@ -120,6 +116,15 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
         "run_time_comment": "integration time summed over the chunks",
     })
     return ds
+
+
+def grid_coordinates(grid: dict, spacing: dict) -> dict:
+    """Coordinates of grid axes (name: values [SI]), with units, long names and spacing
+    (``linear``, ``log`` or ``list``)."""
+    return {name: (name, values, {"units": PARAMETERS[name].unit,
+                                  "long_name": PARAMETERS[name].description,
+                                  "grid_spacing": spacing[name]})
+            for name, values in grid.items()}
 
 
 def run_attributes(parameters: dict, notes) -> dict:

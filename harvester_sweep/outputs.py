@@ -36,7 +36,7 @@ class Output:
     where : str
         ``"engine"`` (a column of the engine's metric row), ``"run"`` (made around the
         engine by the periodic-orbit solver: error estimate, multipliers, work done),
-        ``"scene"`` (a scene's only), ``"sweep"``, ``"basin"`` (the basins of one point,
+        ``"scene"`` (a scene's only), ``"sweep"``, ``"basin"`` (basins of attraction,
         :mod:`harvester_sweep.basins`) or ``"branch"`` (a branch of orbits,
         :mod:`harvester_sweep.continuation`).
     dims : tuple of str
@@ -152,6 +152,10 @@ _OUTPUTS = (
            "attractor", where="basin"),
     Output("basin_fraction_error", "1", "binomial standard error of basin_fraction, "
            "sqrt(f (1 - f) / samples)", where="basin"),
+    Output("impact_basin_fraction", "1", "fraction of the initial states that reach an orbit "
+           "striking the stop", where="basin"),
+    Output("impact_basin_fraction_error", "1", "binomial standard error of "
+           "impact_basin_fraction", where="basin"),
     Output("fraction_not_settled", "1", "fraction of the initial states whose motion did "
            "not settle within max_periods", where="basin"),
     Output("fraction_diverged", "1", "fraction of the initial states whose integration "
@@ -221,7 +225,8 @@ def markdown_table() -> str:
         if o.name == "status":
             meaning += ": " + ", ".join(f"{s.code} {s.name}" for s in STATUSES)
         scope = {"scene": " (scene only)", "sweep": " (sweep, over `sample`)",
-                 "basin": " (`basin_fractions`)", "branch": " (`continue_branch`)"}.get(o.where, "")
+                 "basin": " (`basin_fractions`, `basin_map`)",
+                 "branch": " (`continue_branch`)"}.get(o.where, "")
         rows.append(f"| `{o.name}` | {'-' if o.units == '1' else o.units} | {meaning}{scope} |")
     return "\n".join(rows)
 

@@ -49,6 +49,7 @@ def pack_parameters(p: dict) -> np.ndarray:
     row[PARAM.v_per_x] = w
     tau = p["resistance"] * p["capacitance"]
     row[PARAM.voltage_per_x] = p["coupling"] / p["capacitance"] * min(1.0, w * tau)
+    row[PARAM.phase] = 0.0  # t = 0 at a zero of the forcing; basins start elsewhere too
     return row
 
 

@@ -146,6 +146,56 @@ def plot_branch(ds, path=None, sweeps=()) -> Figure:
     return _save(fig, path)
 
 
+def plot_basins(ds, path=None) -> Figure:
+    """Basins of attraction (a dataset of :mod:`harvester_sweep.basins`).
+
+    Over two grid axes: a map of ``impact_basin_fraction``, the share of starts that land
+    on an orbit striking the stop. Over one: that share with its standard error. At one
+    point: each attractor's basin fraction, labelled with its impacts per period and power.
+    """
+    axes_names = ds.attrs["grid_axes"].split()
+    fig = Figure(figsize=(7, 4.8), layout="constrained")
+    ax = fig.subplots()
+    name = "impact_basin_fraction"
+    if len(axes_names) == 2:
+        x_name, y_name = sorted(axes_names, key=lambda a: a != "frequency")  # frequency across
+        scale, prefix = _prefix(ds[y_name].values)
+        mesh = ax.pcolormesh(ds[x_name].values, ds[y_name].values / scale,
+                             ds[name].transpose(y_name, x_name).values, vmin=0.0, vmax=1.0,
+                             shading="nearest", cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label=_label(ds, name))
+        ax.set_ylabel(_label(ds, y_name, prefix))
+        _set_scale(ax, ds, y_name, "y")
+    elif len(axes_names) == 1:
+        x_name = axes_names[0]
+        ax.errorbar(ds[x_name].values, ds[name].values, yerr=ds[name + "_error"].values,
+                    marker="o", ms=3, capsize=2, lw=1.0)
+        ax.set_ylim(-0.03, 1.03)
+        ax.set_ylabel(_label(ds, name))
+        ax.grid(alpha=0.3)
+    elif not axes_names:
+        x_name = None
+        k = np.arange(1, ds.sizes["attractor"] + 1)
+        ax.bar(k, ds["basin_fraction"].values, yerr=ds["basin_fraction_error"].values,
+               capsize=3)
+        ax.set_xticks(k, [f"{int(p)}T, {i:g} impacts/T\n{w:.3g} W" for p, i, w in zip(
+            ds["orbit_period"].values, ds["impacts_per_period"].values, ds["power"].values)])
+        ax.set_ylabel(_label(ds, "basin_fraction"))
+        ax.set_ylim(0.0, 1.0)
+    else:
+        raise ParameterError(f"plot: basins over {len(axes_names)} grid axes; draw one or two "
+                             "(select the others with xarray first)")
+    if x_name is not None:
+        ax.set_xlabel(_label(ds, x_name))
+        _set_scale(ax, ds, x_name)
+    starts = (f"base shock {ds.attrs['shock']:g} m/s" if "shock" in ds.attrs
+              else "starts in a box around rest")
+    ax.set_title(f"{ds.attrs['samples']} starts a point, {starts}", loc="left",
+                 fontsize="medium")
+    fig.suptitle(_title(ds, axes_names) + ": basins of attraction")
+    return _save(fig, path)
+
+
 def _save(fig: Figure, path) -> Figure:
     if path is not None:
         fig.savefig(path, dpi=120)

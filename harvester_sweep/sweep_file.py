@@ -229,7 +229,7 @@ def load_sweep(source) -> SweepSpec:
     base = resolve_parameters(preset, **fixed)  # bad values, named
     grid, spacing = {}, {}
     for name, entry in table(source, "grid").items():
-        grid[name], spacing[name] = _axis(name, entry, fixed)
+        grid[name], spacing[name] = axis(name, entry, fixed)
     if not grid:
         raise ParameterError("grid: give at least one parameter to sweep, e.g. "
                              "frequency = { start = 100, stop = 300, num = 201 }")
@@ -305,7 +305,7 @@ def table(source: dict, key: str) -> dict:
     return value
 
 
-def _axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
+def axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
     """Values [SI] and spacing of one grid axis, each value checked against its range."""
     key = f"grid.{_key(name)}"
     if name not in PARAMETERS:

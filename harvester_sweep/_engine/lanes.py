@@ -110,6 +110,7 @@ def load(L, j, p, y, it):
         for c in range(5):
             L[row + c * LANES + j] = m[r, c]
     L[LANE.steps + j], L[LANE.locate + j] = n_steps, p[PARAM.locate]
+    L[LANE.phase + j] = p[PARAM.phase]
     x, v, V = y[STATE.x], y[STATE.v], y[STATE.voltage]
     vimp = y[STATE.approach_velocity]
     latch = p[PARAM.latch]
@@ -130,7 +131,7 @@ def load(L, j, p, y, it):
 
 @njit(**JIT)
 def _start_period(L, j, it):
-    """Reset the per-period accumulators of lane ``j`` and the forcing phase to 0, for a
+    """Reset the per-period accumulators of lane ``j`` and the forcing phase to its start, for a
     period whose first step is taken in iteration ``it`` of the lane loop.
 
     Every lane takes one step an iteration, so a lane's steps into its period are the
@@ -148,7 +149,8 @@ def _start_period(L, j, it):
     )
     L[LANE.fc_previous + j], L[LANE.fc + j], L[LANE.fc_max + j] = fc, fc, fc
     L[LANE.impacts + j], L[LANE.sum_vimp + j] = 0.0, 0.0
-    L[LANE.sin + j], L[LANE.cos + j] = 0.0, 1.0
+    phase = L[LANE.phase + j]  # (0 but for a start within a period: sin 0, cos 1 exactly)
+    L[LANE.sin + j], L[LANE.cos + j] = math.sin(phase), math.cos(phase)
     L[LANE.k0 + j] = it
     L[LANE.k_end + j] = it + min(SYNC, L[LANE.steps + j]) - 1.0
 
@@ -557,10 +559,10 @@ def finish_step(L, j, it):
     k = it + 1.0 - k0  # steps into the period after this one
     # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
     # every SYNC steps (the rotation's rounding drifts); at k = n_steps the period ends
-    # and _start_period sets it to 0.
+    # and _start_period sets it to the start's.
     sync = SYNC * math.floor(k / SYNC)
     if k == sync and k < n_steps:
-        phase = 2.0 * math.pi * k / n_steps
+        phase = 2.0 * math.pi * k / n_steps + L[LANE.phase + j]
         L[LANE.sin + j], L[LANE.cos + j] = math.sin(phase), math.cos(phase)
     else:
         cb, sb = L[LANE.cos_step + j], L[LANE.sin_step + j]

@@ -55,6 +55,7 @@ PARAM = _layout("ParameterRow", (
     ("locate", "1: locate contact switches inside the step, 0: plain fixed steps [-]"),
     ("v_per_x", "velocity scale per displacement, w [1/s] (settle test)"),
     ("voltage_per_x", "voltage scale per displacement, theta/C_p min(1, w R C_p) [V/m]"),
+    ("phase", "forcing phase phi at each period's start: A sin(w t + phi), t from it [rad]"),
 ))
 
 #: A point's metrics, in the engine's order; the names are the public ones
@@ -162,6 +163,7 @@ LANE = _layout("LaneTable", (
     ("sin_eighth", "sin of an eighth of a step's phase"),
     ("steps", "steps per period"),
     ("locate", "1: contact switches located"),
+    ("phase", "forcing phase at each period's start [rad]"),
     # ... the contact-free step as the linear map it is (model.free_step_map): the
     # increments of x, v, V (rows) from (x, v, V, sin, cos) at its start (columns) ...
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),

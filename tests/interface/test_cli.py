@@ -157,3 +157,55 @@ def test_bad_continuation_files_exit_2_with_one_line(tmp_path, table, words, cap
     for word in words:
         assert word in err, err
     assert not (tmp_path / "b.nc").exists()
+
+
+BASINS = """preset = "paper"
+[parameters]
+steps_per_period = 512
+[grid]
+frequency = [100.0, 245.0]
+[basins]
+samples = 32
+shock = 0.03
+"""
+
+
+def test_basins_writes_the_map_summarises_it_and_plots_it(tmp_path, capsys):
+    """A one-axis map and a one-point run: CF files, a summary on stdout, the figures."""
+    spec, nc, png = tmp_path / "b.toml", tmp_path / "basins.nc", tmp_path / "basins.png"
+    spec.write_text(BASINS)
+    assert main(["basins", str(spec), "--output", str(nc), "--plot", str(png), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("2 point(s) x 32 starts (base shock"), out
+    with xr.open_dataset(nc) as ds:
+        assert ds["frequency"].attrs["units"] == "Hz" and ds.attrs["shock_units"] == "m/s"
+        for name, var in ds.data_vars.items():
+            assert "units" in var.attrs and "long_name" in var.attrs, name
+        assert ds["basin_fraction"].dims == ("frequency", "attractor")
+        assert float(ds["basin_fraction"].sel(frequency=100.0)[0]) == 1.0
+    assert png.stat().st_size > 10_000
+    spec.write_text(BASINS.replace("frequency = [100.0, 245.0]", "").replace(
+        "shock = 0.03", "box = { x = 2e-6 }"))
+    assert main(["basins", str(spec), "--output", str(nc), "--quiet"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()[2:]]
+    assert rows and rows[0][0] == "1", rows  # the attractors, one a line
+    assert main(["plot", str(nc), "--output", str(png)]) == 0
+
+
+@pytest.mark.parametrize("table, words", [
+    ("[basins]\nshock = -1.0", ["basins.shock [m/s] = -1.0"]),
+    ("[basins]\nsamples = 0", ["basins.samples"]),
+    ("[basins]\nwho = 1", ["basins.who", "unknown"]),
+    ("[grid]\nstiffness = [1.0]", ["grid.stiffness", "unknown parameter"]),
+    ("[grid]\nfrequency = [-5.0]", ["grid.frequency", "Hz"]),
+    ("[basins]\nshock = 0.01\nbox = { x = 1e-6 }", ["box and shock"]),
+])
+def test_bad_basin_files_exit_2_with_one_line(tmp_path, table, words, capsys):
+    spec = tmp_path / "b.toml"
+    spec.write_text(f'preset = "paper"\n{table}\n')
+    assert main(["basins", str(spec), "--output", str(tmp_path / "b.nc")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("harvester-sweep: error:"), err
+    for word in words:
+        assert word in err, err
+    assert not (tmp_path / "b.nc").exists()

@@ -5,7 +5,15 @@ import numba
 import numpy as np
 import pytest
 
-from harvester_sweep import ParameterError, basin_fractions, packing, resolve_parameters
+from harvester_sweep import (
+    ParameterError,
+    basin_fractions,
+    basin_map,
+    basins,
+    packing,
+    resolve_parameters,
+    run_scene,
+)
 from harvester_sweep._engine import METRIC, STATUS, run_points
 from tests.helpers import phasor
 
@@ -68,6 +76,56 @@ def test_the_same_seed_gives_the_same_numbers_on_any_thread_count():
     assert not np.array_equal(first.basin_fraction.values, other.basin_fraction.values)
 
 
+def test_a_shock_of_nothing_returns_every_start_to_the_orbit_from_rest():
+    """Starts spread over every forcing phase of the orbit reached from rest, nudged by a
+    1e-9 m/s shock, all reach that orbit again (each compared with the orbit at its own
+    phase): one attractor holds every start, and it is the scene's orbit."""
+    ds = basin_fractions(samples=64, shock=1e-9, **BAND)
+    assert ds.sizes["attractor"] == 1
+    assert float(ds.basin_fraction[0]) == float(ds.impact_basin_fraction) == 1.0
+    scene = run_scene("paper", **BAND).metrics
+    for name in ("power", "x_max", "impacts_per_period"):
+        assert float(ds[name][0]) == pytest.approx(scene[name], rel=1e-7), name
+
+
+def test_a_shock_in_the_band_knocks_some_starts_onto_the_stop_free_orbit():
+    """A 0.03 m/s shock on the impacting orbit sends some starts to the coexisting
+    stop-free orbit, the closed-form phasor; every start is counted once."""
+    ds = basin_fractions(samples=128, shock=0.03, **BAND)
+    fractions, impacts = ds.basin_fraction.values, ds.impacts_per_period.values
+    assert fractions.sum() + float(ds.fraction_not_settled) + float(ds.fraction_diverged) \
+        == pytest.approx(1.0, abs=1e-12)
+    assert float(ds.impact_basin_fraction) == pytest.approx(fractions[impacts > 0].sum())
+    free = np.flatnonzero(impacts == 0)
+    assert free.size == 1 and 0 < fractions[free[0]] < 0.5
+    p = resolve_parameters("paper", **BAND)
+    _, V = phasor(**p)
+    assert float(ds.power[free[0]]) == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]),
+                                                     rel=1e-5)
+
+
+def test_a_map_holds_each_points_basins_whatever_the_engine_calls(monkeypatch):
+    """Each point of a map has the basins basin_fractions finds there with the same draws,
+    bit for bit, whether the points share engine calls or not; one attractor far below
+    the band; every start counted once."""
+    grid = {"gap": [BAND["gap"], 2 * BAND["gap"]], "frequency": [100.0, BAND["frequency"]]}
+    kwargs = dict(samples=48, seed=2, steps_per_period=1024, progress=False)
+    shared = basin_map(grid, **kwargs)
+    monkeypatch.setattr(basins, "CALL_STARTS", 48)  # one point a call
+    alone = basin_map(grid, **kwargs)
+    for name in shared.data_vars:
+        np.testing.assert_array_equal(shared[name].values, alone[name].values)
+    total = (shared.basin_fraction.fillna(0).sum("attractor") + shared.fraction_not_settled
+             + shared.fraction_diverged)
+    np.testing.assert_allclose(total.values, 1.0, atol=1e-12)
+    below = shared.sel(frequency=100.0)
+    np.testing.assert_array_equal(below.basin_fraction.values[:, 0], 1.0)
+    point = basin_fractions(samples=48, seed=2, **BAND)
+    at = shared.isel(gap=0, frequency=1).isel(attractor=slice(0, point.sizes["attractor"]))
+    for name in ("basin_fraction", "power", "x_max", "impact_basin_fraction"):
+        np.testing.assert_array_equal(at[name].values, point[name].values)
+
+
 @pytest.mark.parametrize("kwargs, words", [
     ({"samples": 0}, "samples [-] = 0"),
     ({"samples": 2.5}, "samples [-] = 2.5"),
@@ -75,6 +133,8 @@ def test_the_same_seed_gives_the_same_numbers_on_any_thread_count():
     ({"box": {"x": -1e-6}}, "box.x [m] = -1e-06"),
     ({"box": {"y": 1e-6}}, "box.y: unknown"),
     ({"gap": "wide"}, "gap"),
+    ({"shock": -0.01}, "shock [m/s] = -0.01"),
+    ({"shock": 0.01, "box": {"x": 1e-6}}, "box and shock"),
 ])
 def test_bad_input_is_refused_in_one_line_naming_it(kwargs, words):
     with pytest.raises(ParameterError) as error:
