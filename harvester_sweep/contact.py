@@ -61,3 +61,16 @@ def contact_damping_of(p: dict, impact_velocity: float) -> float:
         return p["contact_damping"]
     velocity = p["impact_velocity"] if p["impact_velocity_mode"] == "fixed" else impact_velocity
     return contact_damping(p["contact_law"], p["restitution"], velocity)
+
+
+def lower_stop(p: dict) -> dict | None:
+    """The lower stop of parameter set ``p`` as a parameter set of its own, with it as the
+    upper stop (gap, hertz_stiffness and restitution its own, the rest ``p``'s): the model
+    is odd without its stops (docs/model.md). None without a lower stop."""
+    if p["lower_gap"] is None:
+        return None
+    return {**p, "gap": p["lower_gap"],
+            "hertz_stiffness": (p["hertz_stiffness"] if p["lower_hertz_stiffness"] is None
+                                else p["lower_hertz_stiffness"]),
+            "restitution": (p["restitution"] if p["lower_restitution"] is None
+                            else p["lower_restitution"])}

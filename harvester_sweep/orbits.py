@@ -21,7 +21,8 @@ How, and why (docs/numerics.md, "Periodic orbits"):
     one Newton step; it is taken only once it is proved that the trajectory from ``t``
     never reaches the stop either: the homogeneous part of a linear motion loses energy
     ``E = (k x^2 + m v^2 + C_p V^2) / 2`` (``dE/dt = -c v^2 - V^2/R``), so
-    ``x(t) <= x*_max + sqrt(2 E(t - y*) / k)`` for all later times;
+    ``x(t) <= x*_max + sqrt(2 E(t - y*) / k)`` for all later times (and
+    ``x(t) >= x*_min - sqrt(2 E / k)`` against a lower stop);
   * an orbit with contact is taken when ``t`` is in its linear regime: ``P^p(t)`` is
     closer to ``y*`` than ``t`` is, and the monodromy predicts it (to ``LINEAR_REGIME``).
   Otherwise the trajectory is integrated on (a chunk as long as all it has run so far,
@@ -360,9 +361,12 @@ class _Points:
         # a first step beyond NEAR of an orbit with contact will not be taken (the step is
         # about the distance from the orbit): integrate on, for about the periods the motion
         # needs to come NEAR (from the monodromy at t), rather than pay the iterations
-        contact = (self.rows[idx, PARAM.khm] > 0) & (
+        r = self.rows[idx]
+        contact = ((r[:, PARAM.khm] > 0) & (
             (m[:, 0, METRIC.impacts_per_period] > 0)
-            | ~(m[:, 0, METRIC.x_max] < self.rows[idx, PARAM.gap]))
+            | ~(m[:, 0, METRIC.x_max] < r[:, PARAM.gap]))) | ((r[:, PARAM.lower_khm] > 0) & (
+                (m[:, 0, METRIC.impacts_per_period_lower] > 0)
+                | ~(m[:, 0, METRIC.x_min] > -r[:, PARAM.lower_gap])))
         far = trajectory & good & contact & (size > NEAR)
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
@@ -415,16 +419,20 @@ class _Points:
         radius = np.max(np.abs(mult), axis=1)
         stable = radius < 1.0
         refining = self.refine[idx] > 0
-        xmax = np.maximum(m[:, METRIC.x_max], centre[:, STATE.x])
-        free = (m[:, METRIC.impacts_per_period] == 0) & (xmax < self.rows[idx, PARAM.gap])
-        e = self.t0[idx] - y
         r = self.rows[idx]
+        xmax = np.maximum(m[:, METRIC.x_max], centre[:, STATE.x])
+        xmin = np.minimum(m[:, METRIC.x_min], centre[:, STATE.x])
+        free = (m[:, METRIC.impacts_per_period] == 0) & (xmax < r[:, PARAM.gap]) \
+            & (m[:, METRIC.impacts_per_period_lower] == 0) & (xmin > -r[:, PARAM.lower_gap])
+        e = self.t0[idx] - y
         with np.errstate(divide="ignore", invalid="ignore"):
             cv = np.where(r[:, PARAM.thc] != 0, r[:, PARAM.thm] / r[:, PARAM.thc], 0.0)
         bound = np.sqrt(e[:, 0] ** 2 + (e[:, 1] ** 2 + cv * e[:, 2] ** 2) / r[:, PARAM.wn2])
-        proved = xmax + bound + PROOF_MARGIN * (np.abs(xmax) + bound) < r[:, PARAM.gap]
-        free |= r[:, PARAM.khm] == 0  # (no stop at all: linear everywhere)
-        proved |= r[:, PARAM.khm] == 0
+        proved = (xmax + bound + PROOF_MARGIN * (np.abs(xmax) + bound) < r[:, PARAM.gap]) \
+            & (xmin - bound - PROOF_MARGIN * (np.abs(xmin) + bound) > -r[:, PARAM.lower_gap])
+        linear = (r[:, PARAM.khm] == 0) & (r[:, PARAM.lower_khm] == 0)  # (no stop at all)
+        free |= linear
+        proved |= linear
         d0 = _norm(e, scale)
         d1 = _norm(self.t1[idx] - y, scale)
         # (the trajectory ran t1_periods from t0: q = t1_periods / p maps of p periods)

@@ -118,10 +118,14 @@ _OUTPUTS = (
     Output("power_peak", "W", "peak instantaneous electrical power v_peak^2/R"),
     Output("x_max", "m", "largest tip displacement (positive towards the stop)"),
     Output("x_min", "m", "smallest tip displacement"),
-    Output("contact_force_max", "N", "peak contact force"),
-    Output("impacts_per_period", "1", "impacts per forcing period"),
-    Output("approach_velocity", "m/s", "mean tip velocity at first touch of the stop",
+    Output("contact_force_max", "N", "peak contact force of the (upper) stop"),
+    Output("impacts_per_period", "1", "impacts on the (upper) stop per forcing period"),
+    Output("approach_velocity", "m/s", "mean tip velocity at first touch of the (upper) stop",
            comment=_NO_IMPACT),
+    Output("impacts_per_period_lower", "1", "impacts on the lower stop per forcing period "
+           "(0 without one)"),
+    Output("contact_force_max_lower", "N", "peak contact force of the lower stop (0 without "
+           "one)"),
     Output("orbit_period", "1", "forcing periods per orbit (0 when not settled)", "int32"),
     Output("status", "1", "outcome of the run", "int8",
            comment="; ".join(f"{s.code} {s.name}: {s.meaning}" for s in STATUSES)),
@@ -206,7 +210,8 @@ SERIES = {
     "displacement": Output("displacement", "m", "tip displacement relative to the base x"),
     "velocity": Output("velocity", "m/s", "tip velocity dx/dt"),
     "voltage": Output("voltage", "V", "voltage across the load V"),
-    "contact_force": Output("contact_force", "N", "contact force of the stop F_c"),
+    "contact_force": Output("contact_force", "N", "contact force of the stops: the upper "
+                            "stop's F_c positive, a lower stop's negative"),
     "instantaneous_power": Output("instantaneous_power", "W",
                                   "instantaneous electrical power V^2/R"),
 }

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import timescales
-from ._engine import PARAM, STATE
-from .contact import contact_damping_of, damping_factor
+from ._engine import NO_STOP, PARAM, STATE
+from .contact import contact_damping_of, damping_factor, lower_stop
 from .parameters import TooStiffError
 
 
@@ -50,6 +50,13 @@ def pack_parameters(p: dict) -> np.ndarray:
     tau = p["resistance"] * p["capacitance"]
     row[PARAM.voltage_per_x] = p["coupling"] / p["capacitance"] * min(1.0, w * tau)
     row[PARAM.phase] = 0.0  # t = 0 at a zero of the forcing; basins start elsewhere too
+    lower = lower_stop(p)
+    row[PARAM.lower_gap] = NO_STOP if lower is None else lower["gap"]
+    if lower is not None:
+        row[PARAM.lower_khm] = lower["hertz_stiffness"] / m
+        row[PARAM.lower_ch] = contact_damping_of(lower, p["impact_velocity"])
+        row[PARAM.lower_latch] = damping_factor(p["contact_law"], lower["restitution"]) \
+            if latched else 0.0
     return row
 
 

@@ -142,6 +142,13 @@ PARAMETERS: dict[str, Parameter] = {
         _P("gap", "m", "distance from rest to the stop g (<= 0: preloaded stop)"),
         _P("hertz_stiffness", "N/m^1.5", "Hertz contact stiffness k_h (0: no stop)", low=0),
         _P("restitution", "1", "coefficient of restitution e", low=0, high=1, low_open=True),
+        _P("lower_gap", "m", "distance from rest to a second stop below the beam, at "
+           "x = -lower_gap (unset: none); same contact law as the upper stop", low=0,
+           low_open=True, optional=True),
+        _P("lower_hertz_stiffness", "N/m^1.5", "Hertz contact stiffness of the lower stop "
+           "(unset: hertz_stiffness)", low=0, optional=True),
+        _P("lower_restitution", "1", "coefficient of restitution of the lower stop (unset: "
+           "restitution)", low=0, high=1, low_open=True, optional=True),
         _P(
             "impact_velocity",
             "m/s",
@@ -216,6 +223,9 @@ _TABLE_1 = dict(
     gap=1e-6,
     hertz_stiffness=9.03e8,
     restitution=0.85,
+    lower_gap=None,
+    lower_hertz_stiffness=None,
+    lower_restitution=None,
     impact_velocity=1.76e-3,
     contact_damping=None,
     contact_law="lankarani_nikravesh",
@@ -283,6 +293,10 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
     checked = dict(_checked_preset(preset or "paper"))
     for name, value in overrides.items():
         checked[name] = _check(name, value)
+    if checked["lower_gap"] is not None and checked["gap"] < 0:
+        raise ParameterError(
+            f"lower_gap [m] = {value_text(checked['lower_gap'])}: a stop on each side needs "
+            f"gap [m] >= 0 (no preloaded upper stop), not {value_text(checked['gap'])}")
     try:
         if checked["stop_mass"] is not None:
             checked["hertz_stiffness"] = hertz_stiffness_from_bodies(

@@ -43,6 +43,10 @@ def plot_scene(ds, path=None) -> Figure:
         if name == "displacement":
             gap = float(ds.attrs["gap"])
             ax.axhline(gap / scale, color="C3", ls="--", lw=1.0, label=f"stop (gap {gap:g} m)")
+            lower = ds.attrs.get("lower_gap", "none")
+            if not isinstance(lower, str):  # (netCDF keeps an unset value as "none")
+                ax.axhline(-float(lower) / scale, color="C2", ls="--", lw=1.0,
+                           label=f"lower stop (lower_gap {float(lower):g} m)")
             ax.legend(loc="lower right", fontsize="small")
     axes[-1].set_xlabel(f"time from t = {float(ds['time'].values[0]):.4g} s [ms]")
     status = STATUS_NAMES[int(ds["status"])]

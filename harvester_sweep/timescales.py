@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .contact import contact_damping_of
+from .contact import contact_damping_of, lower_stop
 
 #: |h lambda| that RK4 keeps stable (2.78 on the negative real axis, 2.83 on the imaginary).
 RK4_STABILITY = 2.5
@@ -71,20 +71,29 @@ def time_scales(p: dict) -> TimeScales:
         return abs(omega * x)
 
     v = max(velocity(w), velocity(wn), 1e-12)
-    kh = p["hertz_stiffness"]
     contact = damping = delta = 0.0
-    # The stop only takes energy out: the motion stays within the linear resonance amplitude.
-    reachable = p["gap"] < 2.0 * v / min(w, wn)
-    if kh > 0 and reachable:
-        ch = contact_damping_of(p, v)
-        delta = (5 * m * v * v / (4 * kh)) ** 0.4
-        if ch > 0:
-            delta = min(delta, (1.25 * m * v / (kh * ch)) ** 0.4)
-        delta += max(-p["gap"], 0.0)  # a preloaded stop is already pressed in
-        contact = math.sqrt(1.5 * kh * math.sqrt(delta) / m)
-        damping = kh * delta**1.5 * ch / m
+    for stop in (p, lower_stop(p)):  # the faster of the stops in reach
+        if stop is not None:
+            c, d, dl = _contact(stop, v, min(w, wn))
+            contact, damping, delta = max(contact, c), max(damping, d), max(delta, dl)
     return TimeScales(w, wn, 1 / (p["resistance"] * p["capacitance"]), contact, damping, v,
                       delta)
+
+
+def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
+    """The contact's rates [1/s] and penetration [m] of the (upper) stop of ``p`` at the
+    expected velocity ``v`` [m/s], zeros when it is out of reach."""
+    kh = p["hertz_stiffness"]
+    m = p["mass"]
+    # The stop only takes energy out: the motion stays within the linear resonance amplitude.
+    if not (kh > 0 and p["gap"] < 2.0 * v / omega):
+        return 0.0, 0.0, 0.0
+    ch = contact_damping_of(p, v)
+    delta = (5 * m * v * v / (4 * kh)) ** 0.4
+    if ch > 0:
+        delta = min(delta, (1.25 * m * v / (kh * ch)) ** 0.4)
+    delta += max(-p["gap"], 0.0)  # a preloaded stop is already pressed in
+    return math.sqrt(1.5 * kh * math.sqrt(delta) / m), kh * delta**1.5 * ch / m, delta
 
 
 def auto_steps_per_period(p: dict) -> int:

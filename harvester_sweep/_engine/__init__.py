@@ -19,7 +19,7 @@ final states. One concept per module:
 
 from . import cache, hermite, lanes, model, rk4, scheduler, steady
 from .cache import SOURCE_DIGEST
-from .layouts import LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
+from .layouts import LANE, LANES, METRIC, N_STROBE, NO_STOP, PARAM, SERIES, STATE, STATUS
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
@@ -37,6 +37,7 @@ __all__ = [
     "MAX_ORBIT_PERIOD",
     "METRIC",
     "N_STROBE",
+    "NO_STOP",
     "PARAM",
     "SERIES",
     "SOURCE_DIGEST",

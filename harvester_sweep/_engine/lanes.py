@@ -123,6 +123,17 @@ def load(L, j, p, y, it):
         vimp,
         ch,
     )
+    # the lower stop waits in the *_other rows (NO_STOP: never reached)
+    g_low, latch_low = p[PARAM.lower_gap], p[PARAM.lower_latch]
+    L[LANE.gap_other + j], L[LANE.latch_other + j] = g_low, latch_low
+    L[LANE.khm_other + j] = p[PARAM.lower_khm]
+    L[LANE.kh_other + j] = p[PARAM.lower_khm] * p[PARAM.mass]
+    L[LANE.ch_other + j] = latch_low / vimp if latch_low > 0.0 else p[PARAM.lower_ch]
+    L[LANE.vimp_other + j] = vimp
+    L[LANE.sign + j], L[LANE.flip_below + j] = 1.0, 0.5 * (g - g_low)
+    if x < L[LANE.flip_below + j]:
+        mirror(L, j)
+    x, v, g, ch = L[LANE.x + j], L[LANE.v + j], L[LANE.gap + j], L[LANE.ch + j]
     L[LANE.on + j] = 1.0 if p[PARAM.locate] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
     L[LANE.fine + j] = 0.0
     L[LANE.periods + j] = 0.0
@@ -149,10 +160,43 @@ def _start_period(L, j, it):
     )
     L[LANE.fc_previous + j], L[LANE.fc + j], L[LANE.fc_max + j] = fc, fc, fc
     L[LANE.impacts + j], L[LANE.sum_vimp + j] = 0.0, 0.0
+    L[LANE.impacts_other + j], L[LANE.sum_vimp_other + j], L[LANE.fc_max_other + j] = (
+        0.0, 0.0, 0.0)
     phase = L[LANE.phase + j]  # (0 but for a start within a period: sin 0, cos 1 exactly)
     L[LANE.sin + j], L[LANE.cos + j] = math.sin(phase), math.cos(phase)
     L[LANE.k0 + j] = it
     L[LANE.k_end + j] = it + min(SYNC, L[LANE.steps + j]) - 1.0
+
+
+# Rows that change sign when a lane mirrors: the state, the forcing, the contact-free map's
+# forcing columns and the mirror's own threshold.
+_NEGATED = (LANE.x, LANE.v, LANE.voltage, LANE.amplitude, LANE.mxs, LANE.mxc, LANE.mvs,
+            LANE.mvc, LANE.mes, LANE.mec, LANE.flip_below)
+# Rows of the stop in use and of the other one, swapped when a lane mirrors.
+_SWAPPED = ((LANE.gap, LANE.gap_other), (LANE.kh, LANE.kh_other), (LANE.khm, LANE.khm_other),
+            (LANE.ch, LANE.ch_other), (LANE.latch, LANE.latch_other),
+            (LANE.vimp, LANE.vimp_other), (LANE.impacts, LANE.impacts_other),
+            (LANE.sum_vimp, LANE.sum_vimp_other), (LANE.fc_max, LANE.fc_max_other))
+
+
+@njit(**JIT)
+def mirror(L, j):
+    """Hand lane ``j`` over to its other stop, out of contact.
+
+    The model without its stops is odd: (x, v, V) -> (-x, -v, -V) with the forcing
+    negated maps its solutions onto each other, and maps the lower stop at x = -g_l onto
+    an upper stop at g_l. So a lane holds one stop at a time, the nearer one, and every
+    contact path of the kernel serves both: at half way between the stops (LANE.flip_below)
+    the lane negates its state and forcing and swaps the two stops' rows. Negation is exact,
+    so a point that never comes half way to a lower stop gets the bits it gets without one.
+    """
+    L[LANE.sign + j] = -L[LANE.sign + j]
+    for r in _NEGATED:
+        L[r + j] = -L[r + j]
+    for a, b in _SWAPPED:
+        L[a + j], L[b + j] = L[b + j], L[a + j]
+    L[LANE.x_max + j], L[LANE.x_min + j] = -L[LANE.x_min + j], -L[LANE.x_max + j]
+    L[LANE.fc + j], L[LANE.fc_previous + j] = 0.0, 0.0
 
 
 @njit(**JIT)
@@ -271,7 +315,8 @@ def _commit_steps(L, contact, it):
         irc, thc = L[LANE.irc + j], L[LANE.thc + j]
         dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
         dq = hermite.v2_integral(V, dV, Vn, dVn, L[LANE.half_h + j], L[LANE.h2_6 + j])
-        need = (v * vn <= 0.0) | (dV * dVn <= 0.0) | (it >= L[LANE.k_end + j])
+        need = ((v * vn <= 0.0) | (dV * dVn <= 0.0) | (it >= L[LANE.k_end + j])
+                | (xn < L[LANE.flip_below + j]))
         if contact:
             on, h = L[LANE.on + j], L[LANE.h + j]
             fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
@@ -555,6 +600,8 @@ def finish_step(L, j, it):
         max(L[LANE.v_peak + j], abs(V), abs(Vn)),
     )
     L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
+    if xn < L[LANE.flip_below + j]:  # nearer the other stop (out of this one's reach)
+        mirror(L, j)
     k0 = L[LANE.k0 + j]
     k = it + 1.0 - k0  # steps into the period after this one
     # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
@@ -577,23 +624,26 @@ def finish_step(L, j, it):
 def end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
     """Book the period that lane ``j`` just finished in iteration ``it``; the status once
     it is done, else -1."""
-    x, v, V, q = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j], L[LANE.q + j]
+    s = L[LANE.sign + j]
+    x, v, V, q = s * L[LANE.x + j], s * L[LANE.v + j], s * L[LANE.voltage + j], L[LANE.q + j]
     n = int(L[LANE.periods + j]) + 1
     L[LANE.periods + j] = n
     if not (math.isfinite(x + v + V + q) and abs(x) <= p[PARAM.x_limit]):
         return STATUS.diverged, 0
     slot = (n - 1) % MAX_ORBIT_PERIOD
-    acc[slot, ACC.q], acc[slot, ACC.x_max], acc[slot, ACC.x_min] = (
-        q,
-        L[LANE.x_max + j],
-        L[LANE.x_min + j],
-    )
+    up = s > 0.0  # the upper stop's rows are those in use, else the other ones
+    acc[slot, ACC.q] = q
+    acc[slot, ACC.x_max] = L[LANE.x_max + j] if up else -L[LANE.x_min + j]
+    acc[slot, ACC.x_min] = L[LANE.x_min + j] if up else -L[LANE.x_max + j]
     acc[slot, ACC.v_max], acc[slot, ACC.v_peak] = L[LANE.v_max + j], L[LANE.v_peak + j]
-    acc[slot, ACC.fc_max], acc[slot, ACC.impacts], acc[slot, ACC.sum_vimp] = (
-        L[LANE.fc_max + j],
-        L[LANE.impacts + j],
-        L[LANE.sum_vimp + j],
-    )
+    impacts, sum_vimp, fc_max = L[LANE.impacts + j], L[LANE.sum_vimp + j], L[LANE.fc_max + j]
+    impacts_o, sum_vimp_o, fc_max_o = (L[LANE.impacts_other + j], L[LANE.sum_vimp_other + j],
+                                       L[LANE.fc_max_other + j])
+    acc[slot, ACC.impacts] = impacts if up else impacts_o
+    acc[slot, ACC.sum_vimp] = sum_vimp if up else sum_vimp_o
+    acc[slot, ACC.fc_max] = fc_max if up else fc_max_o
+    acc[slot, ACC.impacts_lower] = impacts_o if up else impacts
+    acc[slot, ACC.fc_max_lower] = fc_max_o if up else fc_max
     r = n % ring_len
     ring[r, STATE.x], ring[r, STATE.v], ring[r, STATE.voltage] = x, v, V
     _start_period(L, j, it + 1.0)
@@ -619,8 +669,10 @@ def end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
 def output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
     """Write the state, stroboscopic samples and metrics of lane ``j``'s finished point."""
     n = int(L[LANE.periods + j])
-    y[STATE.x], y[STATE.v], y[STATE.voltage] = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j]
-    y[STATE.approach_velocity] = L[LANE.vimp + j]
+    s = L[LANE.sign + j]
+    y[STATE.x], y[STATE.v] = s * L[LANE.x + j], s * L[LANE.v + j]
+    y[STATE.voltage] = s * L[LANE.voltage + j]
+    y[STATE.approach_velocity] = L[LANE.vimp + j] if s > 0.0 else L[LANE.vimp_other + j]
     n_strobe = strobe.shape[0]
     for i in range(n_strobe):
         age = n_strobe - 1 - i
@@ -670,6 +722,7 @@ def idle(L, j):
     ) = 0.0, 0.0, np.inf, 1.0, 0.0
     L[LANE.gap + j], L[LANE.irc + j], L[LANE.thc + j], L[LANE.k_end + j] = np.inf, -1.0, 0.0, np.inf
     L[LANE.fc + j], L[LANE.fc_previous + j] = 0.0, 0.0
+    L[LANE.sign + j], L[LANE.flip_below + j] = 1.0, -np.inf
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = 0.0, 1.0, 1.0
     for r in range(LANE.mxx, LANE.mec + LANES, LANES):
         L[r + j] = 0.0
@@ -678,7 +731,8 @@ def idle(L, j):
 @njit(**JIT)
 def take(L, j, params, states, pt, ring, acc, gaps, it):
     load(L, j, params[pt], states[pt], it)
-    ring[j, 0, STATE.x], ring[j, 0, STATE.v] = L[LANE.x + j], L[LANE.v + j]
-    ring[j, 0, STATE.voltage] = L[LANE.voltage + j]
+    s = L[LANE.sign + j]
+    ring[j, 0, STATE.x], ring[j, 0, STATE.v] = s * L[LANE.x + j], s * L[LANE.v + j]
+    ring[j, 0, STATE.voltage] = s * L[LANE.voltage + j]
     acc[j, :, :] = 0.0
     gaps[j, :, :] = np.inf

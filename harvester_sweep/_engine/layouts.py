@@ -56,7 +56,15 @@ PARAM = _layout("ParameterRow", (
     ("v_per_x", "velocity scale per displacement, w [1/s] (settle test)"),
     ("voltage_per_x", "voltage scale per displacement, theta/C_p min(1, w R C_p) [V/m]"),
     ("phase", "forcing phase phi at each period's start: A sin(w t + phi), t from it [rad]"),
+    # the lower stop at x = -lower_gap: NO_STOP when there is none
+    ("lower_gap", "distance from rest to the lower stop g_l [m]"),
+    ("lower_khm", "k_hl/m of the lower stop [N/(m^1.5 kg)]"),
+    ("lower_ch", "contact damping of the lower stop in fixed mode [s/m]"),
+    ("lower_latch", "factor c_h v_imp of the lower stop's latched law, 0 in fixed mode [-]"),
 ))
+#: PARAM.lower_gap of a point without a lower stop [m]: far beyond any motion, finite
+#: (the kernel's arithmetic stays finite).
+NO_STOP = 1e300
 
 #: A point's metrics, in the engine's order; the names are the public ones
 #: (harvester_sweep.outputs describes each).
@@ -70,6 +78,8 @@ METRIC = _layout("MetricRow", (
     ("contact_force_max", "peak contact force [N]"),
     ("impacts_per_period", "first touches per forcing period [-]"),
     ("approach_velocity", "mean velocity at first touch [m/s]"),
+    ("impacts_per_period_lower", "first touches of the lower stop per forcing period [-]"),
+    ("contact_force_max_lower", "peak contact force of the lower stop [N]"),
     ("orbit_period", "forcing periods per orbit, 0 when not settled [-]"),
     ("status", "outcome, a code of STATUS [-]"),
     ("periods_run", "forcing periods integrated [-]"),
@@ -98,6 +108,8 @@ ACC = _layout("Accumulators", (
     ("fc_max", "largest contact force [N]"),
     ("impacts", "first touches [-]"),
     ("sum_vimp", "sum of the approach velocities at first touch [m/s]"),
+    ("impacts_lower", "first touches of the lower stop [-]"),
+    ("fc_max_lower", "largest contact force of the lower stop [N]"),
 ))
 
 #: Points stepped together by one thread, and lanes that take the contact-free code together
@@ -164,6 +176,14 @@ LANE = _layout("LaneTable", (
     ("steps", "steps per period"),
     ("locate", "1: contact switches located"),
     ("phase", "forcing phase at each period's start [rad]"),
+    # ... a second stop: the lane holds the state mirrored, (-x, -v, -V) under the forcing
+    # -A sin, while the lower stop is the nearer (see lanes.mirror); the rows of the stop
+    # not in use wait in the *_other rows ...
+    ("sign", "+1: the state as it is, the upper stop in use; -1: mirrored, the lower"),
+    ("flip_below", "the lane mirrors when x falls below this: half way to the other stop [m]"),
+    ("gap_other", "gap of the stop not in use [m]"), ("kh_other", ""), ("khm_other", ""),
+    ("ch_other", ""), ("latch_other", ""), ("vimp_other", ""), ("impacts_other", ""),
+    ("sum_vimp_other", ""), ("fc_max_other", ""),
     # ... the contact-free step as the linear map it is (model.free_step_map): the
     # increments of x, v, V (rows) from (x, v, V, sin, cos) at its start (columns) ...
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),

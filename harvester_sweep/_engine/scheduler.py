@@ -161,8 +161,10 @@ def _fetch_add(typingctx, counts, i):
 def _record(series, L, i):
     """Row ``i`` of a recorded series (layouts.SERIES) from the point of lane 0."""
     if i < series.shape[0]:
-        series[i, SERIES.x], series[i, SERIES.v] = L[LANE.x], L[LANE.v]
-        series[i, SERIES.voltage], series[i, SERIES.contact_force] = L[LANE.voltage], L[LANE.fc]
+        s = L[LANE.sign]  # (the lane's state may be mirrored: lanes.mirror)
+        series[i, SERIES.x], series[i, SERIES.v] = s * L[LANE.x], s * L[LANE.v]
+        series[i, SERIES.voltage], series[i, SERIES.contact_force] = (
+            s * L[LANE.voltage], s * L[LANE.fc])
 
 
 def run_points(params, states, metrics, strobes, successors=None, on_points=None,

@@ -87,7 +87,7 @@ def gap(ring, n, period, ring_len, xs, vs, es):
 @njit(**JIT)
 def reduce(acc, n, periods, p, metrics):
     """Metrics over the last ``periods`` forcing periods from the per-period accumulators."""
-    q, n_imp, sum_vimp = 0.0, 0.0, 0.0
+    q, n_imp, sum_vimp, n_low, fc_low = 0.0, 0.0, 0.0, 0.0, 0.0
     xmax, xmin, vpk, fcmax = -np.inf, np.inf, 0.0, 0.0
     for i in range(periods):
         slot = (n - 1 - i) % MAX_ORBIT_PERIOD
@@ -96,6 +96,8 @@ def reduce(acc, n, periods, p, metrics):
         vpk, fcmax = max(vpk, acc[slot, ACC.v_peak]), max(fcmax, acc[slot, ACC.fc_max])
         n_imp += acc[slot, ACC.impacts]
         sum_vimp += acc[slot, ACC.sum_vimp]
+        n_low += acc[slot, ACC.impacts_lower]
+        fc_low = max(fc_low, acc[slot, ACC.fc_max_lower])
     mean_v2 = q / (max(periods, 1) * p[PARAM.period])
     metrics[METRIC.power] = mean_v2 / p[PARAM.resistance]
     metrics[METRIC.v_rms] = math.sqrt(mean_v2)
@@ -105,3 +107,5 @@ def reduce(acc, n, periods, p, metrics):
     metrics[METRIC.contact_force_max] = fcmax
     metrics[METRIC.impacts_per_period] = n_imp / max(periods, 1)
     metrics[METRIC.approach_velocity] = sum_vimp / n_imp if n_imp > 0 else np.nan
+    metrics[METRIC.impacts_per_period_lower] = n_low / max(periods, 1)
+    metrics[METRIC.contact_force_max_lower] = fc_low
