@@ -267,9 +267,7 @@ def _continue(args) -> int:
     from .branch_file import load_continuation
     from .continuation import NoOrbitError, continue_branch
 
-    _check_output(args.output, (".nc",))
-    if args.plot is not None:
-        _check_output(args.plot, _FIGURES)
+    _check_outputs(args)
     spec = load_continuation(args.spec_file)  # bad input: one line, before anything else
     _announce_compilation()
     try:
@@ -278,15 +276,26 @@ def _continue(args) -> int:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
         return EXIT_DIVERGED
     print(_bifurcation_table(ds))
-    with _writing(args.output):
-        from .datasets import write_netcdf
+    return _write(ds, args, "plot_branch")
 
+
+def _check_outputs(args) -> None:
+    """The netCDF file and optional figure a command writes, checked before any work."""
+    _check_output(args.output, (".nc",))
+    if args.plot is not None:
+        _check_output(args.plot, _FIGURES)
+
+
+def _write(ds, args, plotter: str) -> int:
+    """Write ``ds`` to args.output, and draw it to args.plot by plots.<plotter> if asked."""
+    from . import plots
+    from .datasets import write_netcdf
+
+    with _writing(args.output):
         write_netcdf(ds, args.output)
     if args.plot:
-        from .plots import plot_branch
-
         with _writing(args.plot):
-            plot_branch(ds, args.plot)
+            getattr(plots, plotter)(ds, args.plot)
     return 0
 
 
@@ -294,24 +303,13 @@ def _basins(args) -> int:
     from .basin_file import load_basins
     from .basins import basin_map
 
-    _check_output(args.output, (".nc",))
-    if args.plot is not None:
-        _check_output(args.plot, _FIGURES)
+    _check_outputs(args)
     spec = load_basins(args.spec_file)  # bad input: one line, before anything else
     _announce_compilation()
     start = time.perf_counter()
     ds = basin_map(**spec, progress=not args.quiet)
     print(_basin_summary(ds, time.perf_counter() - start))
-    with _writing(args.output):
-        from .datasets import write_netcdf
-
-        write_netcdf(ds, args.output)
-    if args.plot:
-        from .plots import plot_basins
-
-        with _writing(args.plot):
-            plot_basins(ds, args.plot)
-    return 0
+    return _write(ds, args, "plot_basins")
 
 
 def _basin_summary(ds, seconds: float) -> str:
