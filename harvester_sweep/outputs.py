@@ -4,7 +4,7 @@ name, CF units, long name and dtype.
 Everything that names an output is made from here: the engine's metric row is read
 through :func:`metric_index` (its order is the engine's, layouts.METRIC), the datasets'
 attributes, the CF ``flag_values``/``flag_meanings`` of ``status``, the scene's table and
-JSON, the command line's counts, the plots' labels and the README's table
+JSON, the command line's counts, the plots' labels and the guide's table of outputs
 (:func:`markdown_table`). The names are the public interface: chosen once, kept.
 """
 
@@ -223,7 +223,7 @@ def metric_index(name: str) -> int:
 
 
 def markdown_table() -> str:
-    """The table of outputs in the README: name, units, meaning, when missing."""
+    """The table of outputs in docs/guide.md: name, units, meaning, when missing."""
     rows = ["| name | unit | meaning |", "| --- | --- | --- |"]
     for o in _OUTPUTS:
         meaning = o.long_name + (f" ({o.comment})" if o.comment and o.name != "status" else "")
@@ -236,5 +236,5 @@ def markdown_table() -> str:
     return "\n".join(rows)
 
 
-if __name__ == "__main__":  # python -m harvester_sweep.outputs: the README's table
+if __name__ == "__main__":  # python -m harvester_sweep.outputs: the guide's table
     print(markdown_table())

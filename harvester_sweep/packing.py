@@ -24,17 +24,13 @@ def pack_parameters(p: dict) -> np.ndarray:
     """The engine's parameter row (layouts.PARAM) of a validated parameter dict [SI]."""
     wn = 2.0 * math.pi * p["natural_frequency"]
     m = p["mass"]
-    latched = p["contact_damping"] is None and p["impact_velocity_mode"] == "latched"
     row = np.zeros(len(PARAM))
     row[PARAM.amplitude] = p["amplitude"]
     row[PARAM.wn2] = wn * wn
     row[PARAM.cm] = 2.0 * p["damping_ratio"] * wn
     row[PARAM.thm] = p["coupling"] / m
-    row[PARAM.khm] = p["hertz_stiffness"] / m
     row[PARAM.mass] = m
-    row[PARAM.gap] = p["gap"]
-    row[PARAM.ch] = contact_damping_of(p, p["impact_velocity"])
-    row[PARAM.latch] = damping_factor(p["contact_law"], p["restitution"]) if latched else 0.0
+    row[PARAM.gap], row[PARAM.khm], row[PARAM.ch], row[PARAM.latch] = _stop_row(p)
     row[PARAM.irc] = 1.0 / (p["resistance"] * p["capacitance"])
     row[PARAM.thc] = p["coupling"] / p["capacitance"]
     row[PARAM.resistance] = p["resistance"]
@@ -51,13 +47,21 @@ def pack_parameters(p: dict) -> np.ndarray:
     row[PARAM.voltage_per_x] = p["coupling"] / p["capacitance"] * min(1.0, w * tau)
     row[PARAM.phase] = 0.0  # t = 0 at a zero of the forcing; basins start elsewhere too
     lower = lower_stop(p)
-    row[PARAM.lower_gap] = NO_STOP if lower is None else lower["gap"]
+    row[PARAM.lower_gap] = NO_STOP
     if lower is not None:
-        row[PARAM.lower_khm] = lower["hertz_stiffness"] / m
-        row[PARAM.lower_ch] = contact_damping_of(lower, p["impact_velocity"])
-        row[PARAM.lower_latch] = damping_factor(p["contact_law"], lower["restitution"]) \
-            if latched else 0.0
+        (row[PARAM.lower_gap], row[PARAM.lower_khm], row[PARAM.lower_ch],
+         row[PARAM.lower_latch]) = _stop_row(lower)
     return row
+
+
+def _stop_row(stop: dict) -> tuple:
+    """The (upper) stop of parameter set ``stop`` as the engine reads it: gap [m], k_h/m
+    [N/(m^1.5 kg)], contact damping in fixed mode [s/m] and the latched law's factor
+    c_h v_imp (0 in fixed mode) [-]."""
+    latched = stop["contact_damping"] is None and stop["impact_velocity_mode"] == "latched"
+    return (stop["gap"], stop["hertz_stiffness"] / stop["mass"],
+            contact_damping_of(stop, stop["impact_velocity"]),
+            damping_factor(stop["contact_law"], stop["restitution"]) if latched else 0.0)
 
 
 def initial_state(p: dict) -> np.ndarray:

@@ -175,15 +175,7 @@ LANE = _layout("LaneTable", (
     ("sin_eighth", "sin of an eighth of a step's phase"),
     ("steps", "steps per period"),
     ("locate", "1: contact switches located"),
-    ("phase", "forcing phase at each period's start [rad]"),
-    # ... a second stop: the lane holds the state mirrored, (-x, -v, -V) under the forcing
-    # -A sin, while the lower stop is the nearer (see lanes.mirror); the rows of the stop
-    # not in use wait in the *_other rows ...
-    ("sign", "+1: the state as it is, the upper stop in use; -1: mirrored, the lower"),
     ("flip_below", "the lane mirrors when x falls below this: half way to the other stop [m]"),
-    ("gap_other", "gap of the stop not in use [m]"), ("kh_other", ""), ("khm_other", ""),
-    ("ch_other", ""), ("latch_other", ""), ("vimp_other", ""), ("impacts_other", ""),
-    ("sum_vimp_other", ""), ("fc_max_other", ""),
     # ... the contact-free step as the linear map it is (model.free_step_map): the
     # increments of x, v, V (rows) from (x, v, V, sin, cos) at its start (columns) ...
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),
@@ -195,4 +187,13 @@ LANE = _layout("LaneTable", (
     ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_dt", ""),
     ("q_wn2", ""), ("q_cm", ""), ("q_thm", ""), ("q_khm", ""), ("q_gap", ""), ("q_ch", ""),
     ("q_irc", ""), ("q_thc", ""),
+    # ... and, out of the lane loop's way, rows read only at a period's start and end: the
+    # forcing phase a period starts at, and a second stop: the lane holds the state
+    # mirrored, (-x, -v, -V) under the forcing -A sin, while the lower stop is the nearer
+    # (see lanes.mirror), and the rows of the stop not in use wait in the *_other rows.
+    ("phase", "forcing phase at each period's start [rad]"),
+    ("sign", "+1: the state as it is, the upper stop in use; -1: mirrored, the lower"),
+    ("gap_other", "gap of the stop not in use [m]"), ("kh_other", ""), ("khm_other", ""),
+    ("ch_other", ""), ("latch_other", ""), ("vimp_other", ""), ("impacts_other", ""),
+    ("sum_vimp_other", ""), ("fc_max_other", ""),
 ), stride=LANES)
