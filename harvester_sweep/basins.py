@@ -34,7 +34,7 @@ import numpy as np
 import xarray as xr
 from tqdm import tqdm
 
-from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, STATE, STATUS, record_series
+from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, SERIES, STATE, STATUS, record_series
 from .datasets import grid_coordinates, run_attributes
 from .linear import linear_response
 from .outputs import OUTPUTS, metric_index
@@ -255,9 +255,9 @@ def _solve(points, samples, seed, halves, shock, progress) -> list:
 
 
 def _shocked(one, when, sign, shock):
-    """Forcing phases [rad] (n * samples,) and states (n * samples, 4) a base shock leaves
-    on the orbit each point of ``one`` reaches from rest (the state the motion reached,
-    where it reaches none)."""
+    """Forcing phases [rad] (n * samples,) and states (n * samples, len(STATE)) a base shock
+    leaves on the orbit each point of ``one`` reaches from rest (the state the motion
+    reached, where it reaches none)."""
     rest = solve(one, samples=MAX_ORBIT_PERIOD)
     phases, states = [], []
     for i, row in enumerate(one.rows):
@@ -267,7 +267,11 @@ def _shocked(one, when, sign, shock):
         step = np.minimum((when * period * n).astype(np.int64), period * n - 1)
         state = np.repeat(rest.finals[i][None], len(when), axis=0)
         state[:, :3] = orbit[step, :3]
-        state[:, STATE.v] -= sign * shock  # the tip's velocity relative to the base
+        state[:, STATE.stop_x] = orbit[step, SERIES.stop_displacement]
+        state[:, STATE.stop_v] = orbit[step, SERIES.stop_velocity]
+        # the velocities relative to the base: the tip's, and a moving stop's (0 if rigid)
+        state[:, STATE.v] -= sign * shock
+        state[:, STATE.stop_v] -= np.where(row[PARAM.stop_ratio] > 0, sign * shock, 0.0)
         phases.append(2.0 * math.pi * (step % n) / n)
         states.append(state)
     return np.concatenate(phases), np.concatenate(states)
@@ -283,7 +287,7 @@ def _attractors(results, part: slice, rows: np.ndarray) -> dict:
     n = int(rows[0, PARAM.steps])
     section = np.rint(rows[:, PARAM.phase] / (2.0 * math.pi) * n).astype(np.int64)
     left = np.flatnonzero(status == STATUS.settled)
-    scale = np.max(np.abs(results.strobes[part][left]), axis=(0, 1)) + 1e-300 \
+    scale = np.max(np.abs(results.strobes[part][left][..., :3]), axis=(0, 1)) + 1e-300 \
         if left.size else None
     groups = []
     while left.size:

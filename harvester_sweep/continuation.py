@@ -47,14 +47,13 @@ from . import _engine
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATUS
 from .linear import linear_response
 from .orbits import (PERTURBATION, ROUNDING, halving_error, monodromy, orbit_scales,
-                     perturbed_copies)
+                     perturbed_copies, state_size)
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PARAMETERS, ParameterError, check_names, resolve_parameters
 from .results import solve
 from .timescales import auto_steps_per_period
 
-D = 3  # components of the period map's state: x [m], v [m/s], V [V]
 #: Newton iterations of one correction before it is given up [-].
 MAX_CORRECTOR = 8
 #: Largest turn of the tangent between two accepted points [rad]: a sharper bend is taken
@@ -124,6 +123,7 @@ class _Problem:
         self.range = hi - lo
         self.steps = steps
         self.scale = scale
+        self.D = len(scale)  # components of the period map (orbits.state_size)
         self.gap = base["gap"]
         self.tolerance = base["settle_tolerance"]
         self._rows = {}
@@ -141,7 +141,7 @@ class _Problem:
         return self._rows[key]
 
     def lam(self, z) -> float:
-        return self.lo + z[3] * self.range
+        return self.lo + z[self.D] * self.range
 
     def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True,
                  strobes=None):
@@ -154,13 +154,13 @@ class _Problem:
         try:
             rows = [self.row(lam, steps)]
             if jacobian:
-                rows = rows * (D + 1) + [self.row(lam + dlam, steps)]
+                rows = rows * (self.D + 1) + [self.row(lam + dlam, steps)]
         except ParameterError:
             return None
         rows = np.array(rows)
         rows[:, PARAM.max_periods] = period
         state = carry.copy()
-        state[:D] = z[:D] * self.scale
+        state[:self.D] = z[:self.D] * self.scale
         states = perturbed_copies(state[None, :], self.scale[None, :]) if jacobian \
             else state[None, :]
         states = np.concatenate([states, states[:1]])[:len(rows)]  # (the lane at lam + dlam)
@@ -171,14 +171,15 @@ class _Problem:
             strobes[:] = samples[:1]
         if not (np.all(metrics[:, METRIC.status] != STATUS.diverged)
                 and np.all(np.isfinite(metrics[:, METRIC.power]))
-                and np.all(np.isfinite(states[:, :D]))):
+                and np.all(np.isfinite(states[:, :self.D]))):
             return None
         if not jacobian:
             return states[0], metrics[0], None, None
-        m = monodromy(states[None, :D + 1], self.scale[None, :])[0]
-        scaled = np.empty((D, D + 1))
-        scaled[:, :D] = m * self.scale[None, :] / self.scale[:, None] - np.eye(D)
-        scaled[:, D] = (states[D + 1, :D] - states[0, :D]) / dlam * self.range / self.scale
+        m = monodromy(states[None, :self.D + 1], self.scale[None, :])[0]
+        scaled = np.empty((self.D, self.D + 1))
+        scaled[:, :self.D] = m * self.scale[None, :] / self.scale[:, None] - np.eye(self.D)
+        scaled[:, self.D] = ((states[self.D + 1, :self.D] - states[0, :self.D]) / dlam
+                             * self.range / self.scale)
         return states[0], metrics[0], m, scaled
 
     def correct(self, predicted, tangent, period: int, carry, steps=None, fixed=None):
@@ -196,7 +197,7 @@ class _Problem:
             if fixed is not None:
                 scaled = fixed
             a = np.vstack([scaled, tangent])
-            residual = np.concatenate([(end[:D] - z[:D] * self.scale) / self.scale,
+            residual = np.concatenate([(end[:self.D] - z[:self.D] * self.scale) / self.scale,
                                        [tangent @ (z - predicted)]])
             try:
                 step = -np.linalg.solve(a, residual)
@@ -209,7 +210,7 @@ class _Problem:
                 return None
             if size <= max(self.tolerance, ROUNDING * cond):
                 state = end.copy()
-                state[:D] = z[:D] * self.scale  # (the fixed point; V_imp carried)
+                state[:self.D] = z[:self.D] * self.scale  # (the fixed point; V_imp carried)
                 return _Point(z, state, metrics, monodromy, scaled, None, period, 0,
                               self.lam(z))
             last = size
@@ -219,7 +220,7 @@ class _Problem:
     def tangent(self, scaled, previous) -> np.ndarray:
         """The unit null vector of the scaled [M - I, dP/dlam], oriented along
         ``previous``."""
-        t = np.linalg.solve(np.vstack([scaled, previous]), np.eye(D + 1)[D])
+        t = np.linalg.solve(np.vstack([scaled, previous]), np.eye(self.D + 1)[self.D])
         return t / np.linalg.norm(t)
 
     # -- test functions ----------------------------------------------------------------
@@ -232,8 +233,8 @@ class _Problem:
         mult = np.linalg.eigvals(point.monodromy)
         pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
         ns = np.abs(mult[pair][0]) ** 2 - 1 if pair.any() else math.nan
-        point.tested = np.array([point.tangent[D],
-                                 np.linalg.det(np.eye(D) + point.monodromy),
+        point.tested = np.array([point.tangent[self.D],
+                                 np.linalg.det(np.eye(self.D) + point.monodromy),
                                  ns,
                                  (point.metrics[METRIC.x_max] - self.gap) / self.scale[0]])
         return point.tested
@@ -377,12 +378,13 @@ def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_
             for v in np.linspace(start, stop, SCALE_SAMPLES)]
     if p0["hertz_stiffness"] == 0 or max(free) < p0["gap"]:
         x = max(x, max(free))
-    scale = orbit_scales(pack_parameters(p0), x, m[METRIC.v_peak])
+    row = pack_parameters(p0)
+    scale = orbit_scales(row, x, m[METRIC.v_peak], state_size(row[None]))
     lo, hi = min(start, stop), max(start, stop)
     problem = _Problem(p0, preset, fixed, parameter, lo, hi, steps, scale)
     period = int(m[METRIC.orbit_period])
-    z0 = np.concatenate([results.finals[0, :D] / scale, [(start - lo) / (hi - lo)]])
-    along = np.array([0.0, 0.0, 0.0, 1.0])  # first: the orbit at the start value itself
+    z0 = np.concatenate([results.finals[0, :problem.D] / scale, [(start - lo) / (hi - lo)]])
+    along = np.eye(problem.D + 1)[problem.D]  # first: the orbit at the start value itself
     first = problem.correct(z0, along, period, results.finals[0])
     if first is None:
         raise NoOrbitError(f"Newton did not converge on the orbit reached from rest at "
@@ -417,8 +419,8 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
     a, ds = head, step
     phases = np.empty((1, head.period, N_STROBE))  # the head's orbit at its p phases
     problem.evaluate(head.z, head.period, head.state, problem.steps, False, phases)
-    phases = np.concatenate([phases[0] / problem.scale,
-                             np.full((head.period, 1), head.z[D])], axis=1)
+    phases = np.concatenate([phases[0, :, :problem.D] / problem.scale,
+                             np.full((head.period, 1), head.z[problem.D])], axis=1)
     while len(points) < budget:
         predicted = a.z + ds * a.tangent
         b = problem.correct(predicted, a.tangent, a.period, a.state)
@@ -548,8 +550,8 @@ def _estimate(problem: _Problem, point: _Point) -> None:
                              steps=2 * problem.steps, fixed=point.jacobian)
     if normal is not None:
         point.shift = problem.lam(normal.z) - problem.lam(point.z)
-    fine = problem.correct(point.z, np.eye(D + 1)[D], point.period, point.state,
-                           steps=2 * problem.steps, fixed=point.jacobian)
+    fine = problem.correct(point.z, np.eye(problem.D + 1)[problem.D], point.period,
+                           point.state, steps=2 * problem.steps, fixed=point.jacobian)
     fine = normal if fine is None else fine
     if fine is not None:
         point.error = float(halving_error(point.metrics, fine.metrics))

@@ -13,9 +13,12 @@ import xarray as xr
 from .outputs import OUTPUTS, RUN_OUTPUTS, SCENE_OUTPUTS, SERIES, STATUS_NAMES, STROBES
 from .parameters import PARAMETERS, PRESET_NOTES, resolve_parameters
 
-#: The coordinate of the Floquet multipliers (outputs with dims ("multiplier",)).
-MULTIPLIER = {"multiplier": ("multiplier", np.arange(1, 4), {
-    "units": "1", "long_name": "Floquet multiplier, by decreasing modulus"})}
+
+def multiplier_coordinate(n: int) -> dict:
+    """The coordinate of the Floquet multipliers (outputs with dims ("multiplier",)): one
+    per component of the period map, 3 (x, v, V), 5 with a moving stop (x_s, v_s)."""
+    return {"multiplier": ("multiplier", np.arange(1, n + 1), {
+        "units": "1", "long_name": "Floquet multiplier, by decreasing modulus"})}
 
 
 def series_dataset(values: np.ndarray, t0: float, parameters: dict) -> xr.Dataset:
@@ -42,7 +45,7 @@ def scene_dataset(result, series: xr.Dataset) -> xr.Dataset:
             value = [np.nan if v is None else v for v in value]
         ds[name] = (output.dims, np.array(np.nan if value is None else value,
                                           dtype=output.dtype), output.attrs)
-    ds = ds.assign_coords(MULTIPLIER)
+    ds = ds.assign_coords(multiplier_coordinate(len(result.metrics["floquet_multipliers_real"])))
     ds.attrs.update(run_attributes(result.parameters, result.notes))
     return ds
 
@@ -91,7 +94,8 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
         for col, name in enumerate(STROBES):  # (the columns of a chunk's strobe)
             data[name] = variable(strobe[..., col], OUTPUTS[name].attrs, extra=("sample",))
 
-    coords = {**MULTIPLIER, **grid_coordinates(spec.grid, spec.spacing)}
+    coords = {**multiplier_coordinate(data["floquet_multipliers_real"].sizes["multiplier"]),
+              **grid_coordinates(spec.grid, spec.spacing)}
     if spec.continuation:
         coords["direction"] = ("direction", list(spec.directions), {
             "long_name": "direction of the frequency continuation: each point starts from the "
@@ -228,7 +232,7 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
                      "(0 at points not located)"})
     coords = {"point": ("point", np.arange(len(points)), {
         "units": "1", "long_name": "point along the branches, in the order followed"}),
-        **MULTIPLIER}
+        **multiplier_coordinate(mult.shape[1])}
     fixed = resolve_parameters(spec["preset"], **spec["fixed"],
                                **{parameter: spec["start"], "steps_per_period": spec["steps"]})
     fixed.pop(parameter)

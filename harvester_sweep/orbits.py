@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _engine
-from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATE, STATUS
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
@@ -76,7 +76,9 @@ REFINEMENTS = 3
 #: period map, times the conditioning of I - M, is converged.
 ROUNDING = 100 * np.finfo(float).eps
 
-D = N_STROBE  # components of the period map's state: x [m], v [m/s], V [V]
+#: Components of the period map's state with a rigid stop: x [m], v [m/s], V [V]; a
+#: moving stop adds its own displacement [m] and velocity [m/s] (N_STROBE in all).
+D = N_RIGID
 SAMPLES = MAX_ORBIT_PERIOD + 1  # stroboscopic samples read back from each run
 
 # what a point is doing (the phase of :class:`_Points`)
@@ -159,17 +161,27 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     return pts.result(samples)
 
 
-def orbit_scales(rows, x, v_peak):
-    """Component scales [m, m/s, V] of orbits of displacement amplitude ``x`` [m] and
-    peak voltage ``v_peak`` [V] (packed rows (..., len(PARAM))): x, w x, and the larger of
-    v_peak and the voltage of that amplitude."""
-    return np.stack([x, rows[..., PARAM.v_per_x] * x,
-                     np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)], axis=-1)
+def state_size(rows) -> int:
+    """Components of the period map of packed rows (n, len(PARAM)) solved together: D, or
+    N_STROBE where one of them has a moving stop."""
+    return N_STROBE if (np.asarray(rows)[:, PARAM.stop_ratio] > 0).any() else D
+
+
+def orbit_scales(rows, x, v_peak, size=D):
+    """Component scales of orbits of displacement amplitude ``x`` [m] and peak voltage
+    ``v_peak`` [V] (packed rows (..., len(PARAM))): x [m], w x [m/s], the larger of v_peak
+    and the voltage of that amplitude [V], and for ``size`` N_STROBE the stop's x [m] and
+    w x [m/s] (its motion is measured against the tip's)."""
+    w_x = rows[..., PARAM.v_per_x] * x
+    scales = [x, w_x, np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)]
+    return np.stack(scales + [x, w_x][:size - D], axis=-1)
 
 
 def perturbed_copies(states, scale):
-    """Each state (n, 4) and D copies moved by PERTURBATION of ``scale`` (n, 3) along
-    each component: (n * (D + 1), 4), the copies of a state after it."""
+    """Each state (n, len(STATE)) and D copies moved by PERTURBATION of ``scale`` (n, D)
+    along each of its first D components: (n * (D + 1), len(STATE)), the copies of a
+    state after it (D = scale.shape[1])."""
+    D = scale.shape[1]
     n = len(states)
     out = np.repeat(states, D + 1, axis=0).reshape(n, D + 1, states.shape[1])
     for c in range(D):
@@ -178,8 +190,9 @@ def perturbed_copies(states, scale):
 
 
 def monodromy(ends, scale):
-    """The monodromy matrices (n, 3, 3) by forward differences from the end states
-    (n, D + 1, >= 3) of the runs of :func:`perturbed_copies` with the same ``scale``."""
+    """The monodromy matrices (n, D, D) by forward differences from the end states
+    (n, D + 1, >= D) of the runs of :func:`perturbed_copies` with the same ``scale`` (n, D)."""
+    D = scale.shape[-1]
     h = PERTURBATION * scale
     return (ends[:, 1:, :D] - ends[:, :1, :D]).transpose(0, 2, 1) / h[:, None, :]
 
@@ -202,6 +215,7 @@ class _Points:
 
     def __init__(self, rows, states, successors, estimated, accuracy, max_steps):
         n = len(rows)
+        self.D = state_size(rows)
         self.rows, self.successors, self.estimated = rows, successors, estimated
         self.accuracy, self.max_steps = accuracy, max_steps
         self.phase = np.full(n, _WAITING)
@@ -215,8 +229,8 @@ class _Points:
         self.iteration = np.zeros(n, dtype=np.int64)
         self.last = np.full(n, np.inf)  # size of the last Newton correction
         self.refine = np.zeros(n, dtype=np.int64)  # re-solves at a finer step so far
-        self.t0 = states[:, :D].copy()  # trajectory state at the attempt's start
-        self.t1 = states[:, :D].copy()  # ... and t1_periods periods later
+        self.t0 = states[:, :self.D].copy()  # trajectory state at the attempt's start
+        self.t1 = states[:, :self.D].copy()  # ... and t1_periods periods later
         self.t1_periods = np.ones(n, dtype=np.int64)
         self.orbit_steps = self.steps.copy()  # steps per period of the orbit taken
         self.floor = np.zeros(n)  # Newton's floor at the orbit taken
@@ -224,13 +238,13 @@ class _Points:
         self.hint = np.zeros(n)  # periods the trajectory should run next (0: no idea)
         self.left = np.zeros(n)  # periods of the trajectory's chunk still to run
         self.tested = np.zeros(n, bool)  # the engine's steady-state test passed
-        self.scale = np.ones((n, D))
+        self.scale = np.ones((n, self.D))
         self.scale[:] = self._linear_scale()
-        self.jacobian = np.full((n, D, D), np.nan)
-        self.first_jacobian = np.full((n, D, D), np.nan)  # at each attempt's start
+        self.jacobian = np.full((n, self.D, self.D), np.nan)
+        self.first_jacobian = np.full((n, self.D, self.D), np.nan)  # at each attempt's start
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
-        self.strobes = np.full((n, SAMPLES, D), np.nan)
+        self.strobes = np.full((n, SAMPLES, self.D), np.nan)
         self.finals = states.copy()
         self.errors = np.full(n, np.nan)
         self.status = np.full(n, STATUS.not_settled)
@@ -257,7 +271,7 @@ class _Points:
         return self._scales(x, 0.0)
 
     def _scales(self, x, v_peak, index=slice(None)):
-        return orbit_scales(self.rows[index], x, v_peak)
+        return orbit_scales(self.rows[index], x, v_peak, self.D)
 
     def start(self, idx):
         """Points ``idx`` start: refused ones are done at once (their state passes on)."""
@@ -275,7 +289,7 @@ class _Points:
         """A Newton attempt from the trajectory's state."""
         self.phase[idx] = _NEWTON
         self.y[idx] = self.traj[idx]
-        self.t0[idx] = self.traj[idx, :D]
+        self.t0[idx] = self.traj[idx, :self.D]
         self.iteration[idx] = 0
         self.last[idx] = np.inf
 
@@ -287,17 +301,17 @@ class _Points:
         newton = np.flatnonzero(self.phase == _NEWTON)
         transient = np.flatnonzero(self.phase == _TRANSIENT)
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
-        owners = np.concatenate([np.repeat(newton, D + 1), transient, estimate])
+        owners = np.concatenate([np.repeat(newton, self.D + 1), transient, estimate])
         rows = self.rows[owners].copy()
         states = np.concatenate([perturbed_copies(self.y[newton], self.scale[newton]),
                                  self.traj[transient], self.y[estimate]])
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
-        k = len(newton) * (D + 1)
+        k = len(newton) * (self.D + 1)
         rows[k:k + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
         rows[k + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))
-        strobes = np.empty((len(owners), SAMPLES, D))
+        strobes = np.empty((len(owners), SAMPLES, self.D))
         # (the engine's steady-state test ends a piece of the motion that settles; it never
         # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer
         # than the SAMPLES periods the test waits for)
@@ -305,9 +319,9 @@ class _Points:
                            on_points=(lambda _: None) if threaded else None)
         np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
         before = int((self.phase == _DONE).sum())
-        m = metrics[:k].reshape(len(newton), D + 1, len(METRIC))
-        f = states[:k].reshape(len(newton), D + 1, len(STATE))
-        self._after_newton(newton, m, f, strobes[:k:D + 1])
+        m = metrics[:k].reshape(len(newton), self.D + 1, len(METRIC))
+        f = states[:k].reshape(len(newton), self.D + 1, len(STATE))
+        self._after_newton(newton, m, f, strobes[:k:self.D + 1])
         j = slice(k, k + len(transient))
         self._after_transient(transient, metrics[j], states[j], strobes[j])
         j = slice(k + len(transient), None)
@@ -323,7 +337,7 @@ class _Points:
         # the attempt's first run is the trajectory's next p periods
         first = idx[trajectory]
         centre = f[:, 0]
-        self.t1[first] = centre[trajectory, :D]
+        self.t1[first] = centre[trajectory, :self.D]
         self.t1_periods[first] = self.p[first]
         self.traj[first] = centre[trajectory]
         self.run[first] += self.p[first]
@@ -337,17 +351,17 @@ class _Points:
         if diverged.any():
             self._diverge(idx[diverged])
         ok = ~diverged & np.all(_sane(m), axis=1)
-        ok &= np.all(np.isfinite(f[:, :, :D]), axis=(1, 2))
-        y = self.y[idx, :D]
+        ok &= np.all(np.isfinite(f[:, :, :self.D]), axis=(1, 2))
+        y = self.y[idx, :self.D]
         xs = np.maximum(np.abs(m[:, 0, METRIC.x_max]), np.abs(m[:, 0, METRIC.x_min]))
         scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, 0, METRIC.v_peak], 1.0),
                              idx)
         scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
         jac = monodromy(f, self.scale[idx])
-        residual = centre[:, :D] - y
+        residual = centre[:, :self.D] - y
         step = np.zeros_like(residual)
         cond = np.full(len(idx), np.inf)
-        a = np.eye(D) - np.where(ok[:, None, None], jac, 0.0)
+        a = np.eye(self.D) - np.where(ok[:, None, None], jac, 0.0)
         scaled = a / scale[:, :, None] * scale[:, None, :]  # (I - M) in scaled components
         good = ok & (np.abs(np.linalg.det(scaled)) > 1e-12)
         if good.any():
@@ -381,8 +395,8 @@ class _Points:
         self.first_jacobian[first] = jac[trajectory]
         # on: a new iterate
         g = idx[going]
-        self.y[g, :D] = y[going] + step[going]
-        self.y[g, D:] = centre[going, D:]
+        self.y[g, :self.D] = y[going] + step[going]
+        self.y[g, self.D:] = centre[going, self.D:]
         self.iteration[g] += 1
         self.last[g] = size[going]
         # converged: a fixed point; taken or not
@@ -397,7 +411,7 @@ class _Points:
 
     def _converged(self, idx, m, centre, strobes, jac, scale, floor):
         p = self.p[idx]
-        y = self.y[idx, :D]
+        y = self.y[idx, :self.D]
         # a shorter period that also closes the orbit: solve again at it
         shorter = np.zeros(len(idx), dtype=np.int64)
         for d in range(int(p.max()) - 1, 0, -1):
@@ -420,7 +434,9 @@ class _Points:
         stable = radius < 1.0
         refining = self.refine[idx] > 0
         r = self.rows[idx]
-        xmax = np.maximum(m[:, METRIC.x_max], centre[:, STATE.x])
+        # (a moving stop comes at most stop_displacement_max towards the tip: 0 if rigid)
+        xmax = np.maximum(m[:, METRIC.x_max], centre[:, STATE.x]) \
+            + m[:, METRIC.stop_displacement_max]
         xmin = np.minimum(m[:, METRIC.x_min], centre[:, STATE.x])
         free = (m[:, METRIC.impacts_per_period] == 0) & (xmax < r[:, PARAM.gap]) \
             & (m[:, METRIC.impacts_per_period_lower] == 0) & (xmin > -r[:, PARAM.lower_gap])
@@ -428,6 +444,10 @@ class _Points:
         with np.errstate(divide="ignore", invalid="ignore"):
             cv = np.where(r[:, PARAM.thc] != 0, r[:, PARAM.thm] / r[:, PARAM.thc], 0.0)
         bound = np.sqrt(e[:, 0] ** 2 + (e[:, 1] ** 2 + cv * e[:, 2] ** 2) / r[:, PARAM.wn2])
+        if self.D > D:  # a moving stop's own transient, bounded alike (k_s x_s^2 + m_s v_s^2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                stop = np.sqrt(e[:, 3] ** 2 + e[:, 4] ** 2 / r[:, PARAM.stop_wn2])
+            bound = bound + np.where(r[:, PARAM.stop_ratio] > 0, stop, 0.0)
         proved = (xmax + bound + PROOF_MARGIN * (np.abs(xmax) + bound) < r[:, PARAM.gap]) \
             & (xmin - bound - PROOF_MARGIN * (np.abs(xmin) + bound) > -r[:, PARAM.lower_gap])
         linear = (r[:, PARAM.khm] == 0) & (r[:, PARAM.lower_khm] == 0)  # (no stop at all)
@@ -448,8 +468,8 @@ class _Points:
         t = idx[taken]
         self.metrics[t] = m[taken]
         self.strobes[t] = strobes[taken]
-        self.finals[t, :D] = y[taken]
-        self.finals[t, D:] = centre[taken, D:]
+        self.finals[t, :self.D] = y[taken]
+        self.finals[t, self.D:] = centre[taken, self.D:]
         self.y[t] = self.finals[t]
         self.jacobian[t] = jac[taken]
         self.orbit_steps[t] = self.steps[t]
@@ -544,17 +564,18 @@ class _Points:
         """Quasi-Newton at twice the steps from the orbit, with its monodromy."""
         if not idx.size:
             return
-        ok = _sane(m) & np.all(np.isfinite(f[:, :D]), axis=1)
-        a = np.eye(D) - np.where(ok[:, None, None], self.jacobian[idx], 0.0)
-        step = np.zeros((len(idx), D))
+        ok = _sane(m) & np.all(np.isfinite(f[:, :self.D]), axis=1)
+        a = np.eye(self.D) - np.where(ok[:, None, None], self.jacobian[idx], 0.0)
+        step = np.zeros((len(idx), self.D))
         if ok.any():
-            step[ok] = np.linalg.solve(a[ok], (f[ok, :D] - self.y[idx[ok], :D])[..., None])[..., 0]
+            residual = f[ok, :self.D] - self.y[idx[ok], :self.D]
+            step[ok] = np.linalg.solve(a[ok], residual[..., None])[..., 0]
         size = np.where(ok, _norm(step, self.scale[idx]), np.inf)
         converged = ok & (size <= self.floor[idx])
         self.iteration[idx] += 1
         failed = ~converged & (self.iteration[idx] >= 4)
         going = ~converged & ~failed
-        self.y[idx[going], :D] += step[going]
+        self.y[idx[going], :self.D] += step[going]
         self._finish(idx[failed])
         c = idx[converged]
         self.fine[c] = m[converged]
@@ -568,7 +589,7 @@ class _Points:
         self.steps[r] = np.maximum(want[again], self.steps[r] + 16)
         self.refine[r] += 1
         self.phase[r] = _NEWTON
-        self.y[r, :D] += step[converged][again]  # the orbit at twice the steps: closer
+        self.y[r, :self.D] += step[converged][again]  # the orbit at twice the steps: closer
         self.iteration[r] = 0
         self.last[r] = np.inf
         self._finish(c[~again])
@@ -602,17 +623,17 @@ class _Points:
         metrics[:, METRIC.status] = self.status
         metrics[:, METRIC.orbit_period] = np.where(settled, self.p, 0)
         metrics[:, METRIC.periods_run] = self.run
-        multipliers = np.full((n, D), np.nan + 0j)
+        multipliers = np.full((n, self.D), np.nan + 0j)
         if settled.any():
             multipliers[settled] = sorted_multipliers(self.jacobian[settled])
-        strobes = np.full((n, samples, D), np.nan)
+        strobes = np.full((n, samples, self.D), np.nan)
         age = np.arange(samples)[::-1]  # periods before the end
         # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
         p = np.where(settled, self.p, SAMPLES)
         back = np.where(settled[:, None], age[None, :] % p[:, None], age[None, :])
         valid = back < SAMPLES
         taken = np.take_along_axis(self.strobes, (SAMPLES - 1 - back.clip(0, SAMPLES - 1))
-                                   [..., None].repeat(D, axis=2), axis=1)
+                                   [..., None].repeat(self.D, axis=2), axis=1)
         strobes[valid] = taken[valid]
         return Orbits(metrics, strobes, self.finals, multipliers, self.errors,
                       self.orbit_steps.astype(np.int64), self.work.astype(np.int64))

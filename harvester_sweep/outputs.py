@@ -126,6 +126,12 @@ _OUTPUTS = (
            "(0 without one)"),
     Output("contact_force_max_lower", "N", "peak contact force of the lower stop (0 without "
            "one)"),
+    Output("stop_displacement_max", "m", "largest displacement |x_s| of the (upper) stop "
+           "relative to the base (0 for a rigid stop)"),
+    Output("contact_force_spread", "N", "impact-to-impact spread of the (upper) stop's peak "
+           "contact force over the orbit: largest minus smallest peak",
+           comment="0 without impacts; NaN where no contact lasted three steps (no peak "
+                   "located)"),
     Output("orbit_period", "1", "forcing periods per orbit (0 when not settled)", "int32"),
     Output("status", "1", "outcome of the run", "int8",
            comment="; ".join(f"{s.code} {s.name}: {s.meaning}" for s in STATUSES)),
@@ -212,6 +218,9 @@ SERIES = {
     "voltage": Output("voltage", "V", "voltage across the load V"),
     "contact_force": Output("contact_force", "N", "contact force of the stops: the upper "
                             "stop's F_c positive, a lower stop's negative"),
+    "stop_displacement": Output("stop_displacement", "m", "displacement of the (upper) stop "
+                                "relative to the base x_s (0 for a rigid stop)"),
+    "stop_velocity": Output("stop_velocity", "m/s", "velocity of the (upper) stop dx_s/dt"),
     "instantaneous_power": Output("instantaneous_power", "W",
                                   "instantaneous electrical power V^2/R"),
 }

@@ -51,6 +51,11 @@ def pack_parameters(p: dict) -> np.ndarray:
     if lower is not None:
         (row[PARAM.lower_gap], row[PARAM.lower_khm], row[PARAM.lower_ch],
          row[PARAM.lower_latch]) = _stop_row(lower)
+    if p["stop_support_stiffness"] is not None:  # a stop on a spring
+        ms = p["stop_mass"]
+        row[PARAM.stop_wn2] = p["stop_support_stiffness"] / ms
+        row[PARAM.stop_cm] = p["stop_support_damping"] / ms
+        row[PARAM.stop_ratio] = m / ms
     return row
 
 
@@ -65,15 +70,27 @@ def _stop_row(stop: dict) -> tuple:
 
 
 def initial_state(p: dict) -> np.ndarray:
-    """State at rest (layouts.STATE): ``(x_0 [m], 0, 0, impact_velocity [m/s])``.
+    """State at rest (layouts.STATE): ``(x_0 [m], 0, 0, 0, 0, impact_velocity [m/s])``
+    (the stop at rest too, a moving stop preloaded or not).
 
     At rest the mass sits at its static equilibrium ``k x_0 + k_h (x_0 - g)^1.5 = 0``: 0
-    unless the stop is preloaded (g < 0), then between g and 0 (found by bisection).
+    unless the stop is preloaded (g < 0), then between g and 0 (found by bisection). A
+    preloaded moving stop gives way too, to ``k_s x_s0 = k_h delta^1.5``.
     """
-    x0 = 0.0
+    x0 = xs0 = 0.0
     k = p["mass"] * (2.0 * math.pi * p["natural_frequency"]) ** 2
-    kh, g = p["hertz_stiffness"], p["gap"]
-    if g < 0.0 and kh > 0.0:
+    kh, g, ks = p["hertz_stiffness"], p["gap"], p["stop_support_stiffness"]
+    if g < 0.0 and kh > 0.0 and ks is not None:
+        # the penetration delta in [0, -g]: delta + F (1/k + 1/k_s) = -g, F = k_h delta^1.5
+        low, high = 0.0, -g
+        for _ in range(200):
+            delta = 0.5 * (low + high)
+            if delta + kh * delta**1.5 * (1.0 / k + 1.0 / ks) + g > 0.0:
+                high = delta
+            else:
+                low = delta
+        x0, xs0 = -kh * delta**1.5 / k, kh * delta**1.5 / ks
+    elif g < 0.0 and kh > 0.0:
         low, high = g, 0.0
         for _ in range(200):
             x0 = 0.5 * (low + high)
@@ -83,6 +100,7 @@ def initial_state(p: dict) -> np.ndarray:
                 low = x0
     state = np.zeros(len(STATE))
     state[STATE.x], state[STATE.approach_velocity] = x0, p["impact_velocity"]
+    state[STATE.stop_x] = xs0
     return state
 
 

@@ -176,12 +176,18 @@ PARAMETERS: dict[str, Parameter] = {
         _P(
             "stop_mass",
             "kg",
-            "mass of the stop; when given, hertz_stiffness is computed from the tip and stop "
-            "materials and masses (Goldsmith, equivalent spheres)",
+            "mass of the stop m_s; when given, hertz_stiffness is computed from the tip and "
+            "stop materials and masses (Goldsmith, equivalent spheres) unless it is given "
+            "too beside stop_support_stiffness; the moving stop's mass",
             low=0,
             low_open=True,
             optional=True,
         ),
+        _P("stop_support_stiffness", "N/m", "stiffness k_s of the spring the (upper) stop is "
+           "mounted on, a stop that moves (unset: a rigid stop); needs stop_mass", low=0,
+           low_open=True, optional=True),
+        _P("stop_support_damping", "N s/m", "damping c_s of the moving stop's support",
+           low=0),
         _P("tip_material", "1", "tip mass material", kind="choice", choices=tuple(MATERIALS)),
         _P("stop_material", "1", "stop material", kind="choice", choices=tuple(MATERIALS)),
         _P(
@@ -231,6 +237,8 @@ _TABLE_1 = dict(
     contact_law="lankarani_nikravesh",
     impact_velocity_mode="fixed",
     stop_mass=None,
+    stop_support_stiffness=None,
+    stop_support_damping=0.0,
     tip_material="copper",
     stop_material="steel",
     steps_per_period=None,
@@ -284,21 +292,31 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
         raise ParameterError(
             f"preset {value_text(preset)} is unknown: must be one of {', '.join(PRESETS)}")
     check_names(overrides)
-    if overrides.get("stop_mass") is not None:
-        if overrides.get("hertz_stiffness") is not None:
-            raise ParameterError(
-                "give hertz_stiffness [N/m^1.5] or stop_mass [kg], not both: "
-                "stop_mass computes hertz_stiffness from the materials"
-            )
     checked = dict(_checked_preset(preset or "paper"))
     for name, value in overrides.items():
         checked[name] = _check(name, value)
+    moving = checked["stop_support_stiffness"] is not None
+    if moving and checked["stop_mass"] is None:
+        raise ParameterError(
+            f"stop_support_stiffness [N/m] = {value_text(checked['stop_support_stiffness'])}: a "
+            f"stop on a spring needs its mass: give stop_mass [kg] > 0")
+    if moving and checked["lower_gap"] is not None:
+        raise ParameterError(
+            f"lower_gap [m] = {value_text(checked['lower_gap'])}: a second stop beside a moving "
+            f"one (stop_support_stiffness) is not modelled: leave lower_gap unset")
+    explicit = overrides.get("hertz_stiffness") is not None
+    if overrides.get("stop_mass") is not None and explicit and not moving:
+        raise ParameterError(
+            "give hertz_stiffness [N/m^1.5] or stop_mass [kg], not both: "
+            "stop_mass computes hertz_stiffness from the materials (both only with a moving "
+            "stop, stop_support_stiffness)"
+        )
     if checked["lower_gap"] is not None and checked["gap"] < 0:
         raise ParameterError(
             f"lower_gap [m] = {value_text(checked['lower_gap'])}: a stop on each side needs "
             f"gap [m] >= 0 (no preloaded upper stop), not {value_text(checked['gap'])}")
     try:
-        if checked["stop_mass"] is not None:
+        if checked["stop_mass"] is not None and not (moving and explicit):
             checked["hertz_stiffness"] = hertz_stiffness_from_bodies(
                 checked["mass"], checked["tip_material"], checked["stop_mass"],
                 checked["stop_material"])

@@ -25,8 +25,9 @@ def _prefix(values: np.ndarray) -> tuple[float, str]:
 def plot_scene(ds, path=None) -> Figure:
     """The four panels of the paper's Fig. 3 over the recorded forcing periods.
 
-    (a) displacement with the stop marked, (b) voltage, (c) instantaneous power,
-    (d) contact force. ``ds`` is a scene dataset (see ``SceneResult.dataset``).
+    (a) displacement with the stop marked (a moving stop's face g + x_s as it moves),
+    (b) voltage, (c) instantaneous power, (d) contact force. ``ds`` is a scene dataset (see
+    ``SceneResult.dataset``).
     """
     fig = Figure(figsize=(8, 9), layout="constrained")
     axes = fig.subplots(4, 1, sharex=True)
@@ -42,7 +43,12 @@ def plot_scene(ds, path=None) -> Figure:
         ax.grid(alpha=0.3)
         if name == "displacement":
             gap = float(ds.attrs["gap"])
-            ax.axhline(gap / scale, color="C3", ls="--", lw=1.0, label=f"stop (gap {gap:g} m)")
+            if isinstance(ds.attrs.get("stop_support_stiffness", "none"), str):  # rigid
+                ax.axhline(gap / scale, color="C3", ls="--", lw=1.0,
+                           label=f"stop (gap {gap:g} m)")
+            else:
+                ax.plot(t, (gap + ds["stop_displacement"].values) / scale, color="C3", lw=1.0,
+                        label=f"moving stop's face g + x_s (gap {gap:g} m)")
             lower = ds.attrs.get("lower_gap", "none")
             if not isinstance(lower, str):  # (netCDF keeps an unset value as "none")
                 ax.axhline(-float(lower) / scale, color="C2", ls="--", lw=1.0,

@@ -7,7 +7,9 @@ impact energy, ``1/2 m v^2 = 2/5 k_h delta^2.5`` (elastic), or, when the damping
 mass first, from ``1/2 m v^2 = 2/5 k_h c_h v delta^2.5`` (plastic), whichever is smaller,
 with ``v`` the larger linear-response velocity amplitude at the forcing and at the natural
 frequency (impacts are strongest near resonance, and the stop makes the response hardening).
-A stop beyond twice the corresponding displacement is taken as out of reach.
+A stop beyond twice the corresponding displacement is taken as out of reach. A stop on a
+spring adds its support's frequency ``sqrt(k_s / m_s)`` and damping rate ``c_s / m_s``, and
+its contact acts on the reduced mass ``m m_s / (m + m_s)`` of tip and stop.
 """
 
 from __future__ import annotations
@@ -39,15 +41,20 @@ class TimeScales:
     contact_damping: float
     impact_velocity: float  # estimate [m/s]
     penetration: float  # estimate [m]
+    support: float = 0.0  # a moving stop's support sqrt(k_s/m_s) [rad/s], 0 when rigid
+    support_damping: float = 0.0  # ... and c_s/m_s [1/s]
 
     def fastest(self) -> tuple[float, str]:
         """Largest rate and what it is, for stability."""
-        rates = (self.natural, self.forcing, self.circuit, self.contact, self.contact_damping)
+        rates = (self.natural, self.forcing, self.circuit, self.support, self.support_damping,
+                 self.contact, self.contact_damping)
         rate = max(rates)
         what = rates.index(rate)  # (the first of equals; described only once chosen)
-        if what < 3:
+        if what < 5:
             return rate, ("the natural frequency", "the forcing",
-                          "the load circuit 1/(R C_p)")[what]
+                          "the load circuit 1/(R C_p)", "the stop's support sqrt(k_s/m_s)",
+                          "the stop's support damping c_s/m_s")[what]
+        what -= 2
         if what == 3:
             return rate, (f"the contact stiffness (linearised contact frequency "
                           f"{self.contact / 2 / math.pi:.3g} Hz at the expected penetration "
@@ -76,8 +83,12 @@ def time_scales(p: dict) -> TimeScales:
         if stop is not None:
             c, d, dl = _contact(stop, v, min(w, wn))
             contact, damping, delta = max(contact, c), max(damping, d), max(delta, dl)
+    support = support_damping = 0.0
+    if p["stop_support_stiffness"] is not None:
+        support = math.sqrt(p["stop_support_stiffness"] / p["stop_mass"])
+        support_damping = p["stop_support_damping"] / p["stop_mass"]
     return TimeScales(w, wn, 1 / (p["resistance"] * p["capacitance"]), contact, damping, v,
-                      delta)
+                      delta, support, support_damping)
 
 
 def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
@@ -85,6 +96,8 @@ def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     expected velocity ``v`` [m/s], zeros when it is out of reach."""
     kh = p["hertz_stiffness"]
     m = p["mass"]
+    if p["stop_support_stiffness"] is not None:  # tip and stop pushed apart: reduced mass
+        m = m * p["stop_mass"] / (m + p["stop_mass"])
     # The stop only takes energy out: the motion stays within the linear resonance amplitude.
     if not (kh > 0 and p["gap"] < 2.0 * v / omega):
         return 0.0, 0.0, 0.0
@@ -104,7 +117,7 @@ def auto_steps_per_period(p: dict) -> int:
     At least 64 steps, rounded up to a multiple of 16.
     """
     s = time_scales(p)
-    oscillation = max(s.forcing, s.natural, s.contact)
+    oscillation = max(s.forcing, s.natural, s.support, s.contact)
     h_accuracy = (p["accuracy"] / ERROR_CONSTANT) ** 0.25 / oscillation
     h_stable = 0.5 * RK4_STABILITY / s.fastest()[0]
     steps = math.ceil(1.0 / (p["frequency"] * min(h_accuracy, h_stable)))
@@ -135,6 +148,8 @@ def slowest_decay(p: dict) -> tuple[float, str]:
     electrical = p["coupling"] ** 2 * p["resistance"] / (1 + (wn * tau) ** 2) / (2 * m)
     rates = {"the mechanical damping": p["damping_ratio"] * wn + electrical,
              f"the load circuit (R C_p = {tau:.3g} s)": 1 / tau}
+    if p["stop_support_stiffness"] is not None:  # the moving stop's own ringing
+        rates["the stop's support damping"] = p["stop_support_damping"] / (2 * p["stop_mass"])
     what = min(rates, key=rates.get)
     return rates[what], what
 

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-from . import hermite, steady
+from . import hermite, steady, stop_motion
 from .flags import JIT
 from .layouts import (
     ACC,
@@ -131,10 +131,20 @@ def load(L, j, p, y, it):
     L[LANE.ch_other + j] = latch_low / vimp if latch_low > 0.0 else p[PARAM.lower_ch]
     L[LANE.vimp_other + j] = vimp
     L[LANE.sign + j], L[LANE.flip_below + j] = 1.0, 0.5 * (g - g_low)
-    if x < L[LANE.flip_below + j]:
+    # a moving stop (stop_motion): its state, and every step finished in scalar code (a
+    # threshold of mirroring no x is below); the lane loop sees no contact (LANE.on 0)
+    xs, vs = y[STATE.stop_x], y[STATE.stop_v]
+    moving = p[PARAM.stop_ratio] > 0.0
+    L[LANE.stop_x + j], L[LANE.stop_v + j] = xs, vs
+    L[LANE.stop_wn2 + j], L[LANE.stop_cm + j] = p[PARAM.stop_wn2], p[PARAM.stop_cm]
+    L[LANE.stop_ratio + j] = p[PARAM.stop_ratio]
+    if moving:
+        L[LANE.flip_below + j] = np.inf
+    elif x < L[LANE.flip_below + j]:
         mirror(L, j)
     x, v, g, ch = L[LANE.x + j], L[LANE.v + j], L[LANE.gap + j], L[LANE.ch + j]
-    L[LANE.on + j] = 1.0 if p[PARAM.locate] == 0.0 or (x > g and 1.0 + ch * v > 0.0) else 0.0
+    on = 1.0 if p[PARAM.locate] == 0.0 or (x - xs > g and 1.0 + ch * (v - vs) > 0.0) else 0.0
+    L[LANE.on + j], L[LANE.stop_on + j] = (0.0, on) if moving else (on, 0.0)
     L[LANE.fine + j] = 0.0
     L[LANE.periods + j] = 0.0
     _start_period(L, j, it)
@@ -150,7 +160,11 @@ def _start_period(L, j, it):
     of the forcing phase or the period's end): a row to compare with, not a count to
     update, in the lane loop."""
     x, v, V = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j]
-    fc = contact_force(x, v, L[LANE.on + j] * L[LANE.kh + j], L[LANE.gap + j], L[LANE.ch + j])
+    xs, vs = L[LANE.stop_x + j], L[LANE.stop_v + j]  # (0 for a rigid stop: the same bits)
+    fc = stop_motion.force(x, v, xs, vs, max(L[LANE.on + j], L[LANE.stop_on + j])
+                           * L[LANE.kh + j], L[LANE.gap + j], L[LANE.ch + j])
+    L[LANE.stop_x_max + j] = abs(xs)
+    L[LANE.fc_peak_min + j], L[LANE.fc_peak_max + j] = np.inf, -np.inf
     L[LANE.q + j] = 0.0
     L[LANE.x_max + j], L[LANE.x_min + j], L[LANE.v_max + j], L[LANE.v_peak + j] = (
         x,
@@ -476,7 +490,19 @@ def _quarter_block(L, b):
 def finish_step(L, j, it):
     """Redo and finish the step of lane ``j`` that the lane loop marked (see lane_steps)
     in iteration ``it``; whether it ends the lane's forcing period."""
-    x, v, V, s0, c0 = _state(L, j)  # the forcing phase at the start of the step
+    s0, c0 = L[LANE.sin + j], L[LANE.cos + j]  # the forcing phase at the start of the step
+    if L[LANE.stop_ratio + j] > 0.0:
+        stop_motion.step(L, j)
+    else:
+        _finish_rigid(L, j)
+    return _next_phase(L, j, it, s0, c0)
+
+
+@njit(inline="always", **JIT)
+def _finish_rigid(L, j):
+    """finish_step with a rigid stop: the step redone where it switches contact or needs
+    quarter steps, its extrema and force peak placed, the lane mirrored past half way."""
+    x, v, V, s0, c0 = _state(L, j)
     on, ch = L[LANE.on + j], L[LANE.ch + j]
     xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
     A, wn2, cm, thm, khm = (
@@ -583,9 +609,7 @@ def finish_step(L, j, it):
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
     if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
-        a = 0.5 * (fcp + fcn) - fc
-        b = 0.5 * (fcn - fcp)
-        L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc - b * b / (4.0 * a))
+        stop_motion.peak(L, j, fcp, fc, fcn, L[LANE.sign + j] > 0.0)
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
     L[LANE.fc_previous + j], L[LANE.fc + j] = fc, fcn
     L[LANE.on + j], L[LANE.ch + j], L[LANE.fine + j] = on, ch, fine
@@ -602,7 +626,13 @@ def finish_step(L, j, it):
     L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
     if xn < L[LANE.flip_below + j]:  # nearer the other stop (out of this one's reach)
         mirror(L, j)
-    k0 = L[LANE.k0 + j]
+
+
+@njit(inline="always", **JIT)
+def _next_phase(L, j, it, s0, c0):
+    """Lane ``j``'s forcing phase after its step from phase sin, cos = s0, c0 in
+    iteration ``it``, and the next iteration to stop at; whether the period ended."""
+    k0, n_steps = L[LANE.k0 + j], L[LANE.steps + j]
     k = it + 1.0 - k0  # steps into the period after this one
     # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
     # every SYNC steps (the rotation's rounding drifts); at k = n_steps the period ends
@@ -644,8 +674,12 @@ def end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
     acc[slot, ACC.fc_max] = fc_max if up else fc_max_o
     acc[slot, ACC.impacts_lower] = impacts_o if up else impacts
     acc[slot, ACC.fc_max_lower] = fc_max_o if up else fc_max
+    acc[slot, ACC.stop_x_max] = L[LANE.stop_x_max + j]
+    acc[slot, ACC.fc_peak_min] = L[LANE.fc_peak_min + j]
+    acc[slot, ACC.fc_peak_max] = L[LANE.fc_peak_max + j]
     r = n % ring_len
     ring[r, STATE.x], ring[r, STATE.v], ring[r, STATE.voltage] = x, v, V
+    ring[r, STATE.stop_x], ring[r, STATE.stop_v] = L[LANE.stop_x + j], L[LANE.stop_v + j]
     _start_period(L, j, it + 1.0)
     if settle:
         orbit = steady.orbit_period(
@@ -672,12 +706,13 @@ def output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
     s = L[LANE.sign + j]
     y[STATE.x], y[STATE.v] = s * L[LANE.x + j], s * L[LANE.v + j]
     y[STATE.voltage] = s * L[LANE.voltage + j]
+    y[STATE.stop_x], y[STATE.stop_v] = L[LANE.stop_x + j], L[LANE.stop_v + j]
     y[STATE.approach_velocity] = L[LANE.vimp + j] if s > 0.0 else L[LANE.vimp_other + j]
     n_strobe = strobe.shape[0]
     for i in range(n_strobe):
         age = n_strobe - 1 - i
         valid = age <= n and status != STATUS.diverged
-        for c in range(N_STROBE):
+        for c in range(min(N_STROBE, strobe.shape[1])):
             strobe[i, c] = ring[(n - age) % ring_len, c] if valid else np.nan
     steady.reduce(
         acc, n, orbit if status == STATUS.settled else min(n, MAX_ORBIT_PERIOD), p, metrics
@@ -723,6 +758,8 @@ def idle(L, j):
     L[LANE.gap + j], L[LANE.irc + j], L[LANE.thc + j], L[LANE.k_end + j] = np.inf, -1.0, 0.0, np.inf
     L[LANE.fc + j], L[LANE.fc_previous + j] = 0.0, 0.0
     L[LANE.sign + j], L[LANE.flip_below + j] = 1.0, -np.inf
+    L[LANE.stop_ratio + j], L[LANE.stop_on + j] = 0.0, 0.0
+    L[LANE.stop_x + j], L[LANE.stop_v + j] = 0.0, 0.0
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = 0.0, 1.0, 1.0
     for r in range(LANE.mxx, LANE.mec + LANES, LANES):
         L[r + j] = 0.0
@@ -734,5 +771,6 @@ def take(L, j, params, states, pt, ring, acc, gaps, it):
     s = L[LANE.sign + j]
     ring[j, 0, STATE.x], ring[j, 0, STATE.v] = s * L[LANE.x + j], s * L[LANE.v + j]
     ring[j, 0, STATE.voltage] = s * L[LANE.voltage + j]
+    ring[j, 0, STATE.stop_x], ring[j, 0, STATE.stop_v] = L[LANE.stop_x + j], L[LANE.stop_v + j]
     acc[j, :, :] = 0.0
     gaps[j, :, :] = np.inf

@@ -28,10 +28,14 @@ STATE = _layout("State", (
     ("x", "tip displacement relative to the base [m]"),
     ("v", "tip velocity [m/s]"),
     ("voltage", "voltage across the load [V]"),
+    ("stop_x", "displacement of a moving stop relative to the base [m] (0: rigid stop)"),
+    ("stop_v", "velocity of a moving stop [m/s]"),
     ("approach_velocity", "approach velocity latched at the last first touch [m/s]"),
 ))
 #: Columns of a stroboscopic sample y(nT): the state without the latched velocity.
 N_STROBE = STATE.approach_velocity
+#: Components of the period map of a point with a rigid stop: x, v, V (its stop stays at 0).
+N_RIGID = STATE.stop_x
 
 #: A point's parameter row, as the engine reads it (made by harvester_sweep.packing).
 PARAM = _layout("ParameterRow", (
@@ -61,6 +65,10 @@ PARAM = _layout("ParameterRow", (
     ("lower_khm", "k_hl/m of the lower stop [N/(m^1.5 kg)]"),
     ("lower_ch", "contact damping of the lower stop in fixed mode [s/m]"),
     ("lower_latch", "factor c_h v_imp of the lower stop's latched law, 0 in fixed mode [-]"),
+    # a stop on a spring (moving): stop_ratio 0 for a rigid stop
+    ("stop_wn2", "k_s/m_s of the stop's support [1/s^2]"),
+    ("stop_cm", "c_s/m_s of the stop's support [1/s]"),
+    ("stop_ratio", "m/m_s, tip mass over stop mass; 0: a rigid stop [-]"),
 ))
 #: PARAM.lower_gap of a point without a lower stop [m]: far beyond any motion, finite
 #: (the kernel's arithmetic stays finite).
@@ -80,6 +88,8 @@ METRIC = _layout("MetricRow", (
     ("approach_velocity", "mean velocity at first touch [m/s]"),
     ("impacts_per_period_lower", "first touches of the lower stop per forcing period [-]"),
     ("contact_force_max_lower", "peak contact force of the lower stop [N]"),
+    ("stop_displacement_max", "largest |x_s| of the (upper) stop [m]"),
+    ("contact_force_spread", "largest minus smallest peak force of the impacts [N]"),
     ("orbit_period", "forcing periods per orbit, 0 when not settled [-]"),
     ("status", "outcome, a code of STATUS [-]"),
     ("periods_run", "forcing periods integrated [-]"),
@@ -96,6 +106,8 @@ SERIES = _layout("SeriesRow", (
     ("v", "tip velocity [m/s]"),
     ("voltage", "voltage across the load [V]"),
     ("contact_force", "contact force of the stop [N]"),
+    ("stop_displacement", "displacement of the (upper) stop [m]"),
+    ("stop_velocity", "velocity of the (upper) stop [m/s]"),
 ))
 
 #: Per-period accumulators, kept for the last MAX_ORBIT_PERIOD periods.
@@ -110,6 +122,9 @@ ACC = _layout("Accumulators", (
     ("sum_vimp", "sum of the approach velocities at first touch [m/s]"),
     ("impacts_lower", "first touches of the lower stop [-]"),
     ("fc_max_lower", "largest contact force of the lower stop [N]"),
+    ("stop_x_max", "largest |x_s| [m]"),
+    ("fc_peak_min", "smallest located peak of the upper stop's contact force [N]"),
+    ("fc_peak_max", "largest located peak of the upper stop's contact force [N]"),
 ))
 
 #: Points stepped together by one thread, and lanes that take the contact-free code together
@@ -196,4 +211,13 @@ LANE = _layout("LaneTable", (
     ("gap_other", "gap of the stop not in use [m]"), ("kh_other", ""), ("khm_other", ""),
     ("ch_other", ""), ("latch_other", ""), ("vimp_other", ""), ("impacts_other", ""),
     ("sum_vimp_other", ""), ("fc_max_other", ""),
+    # ... the peaks of the upper stop's contact force over the period ...
+    ("fc_peak_min", "smallest located peak of the upper stop's force [N]"),
+    ("fc_peak_max", "largest located peak of the upper stop's force [N]"),
+    # ... and a moving stop (stop_motion): a lane with one takes every step in scalar code.
+    ("stop_x", "stop displacement [m]"), ("stop_v", "stop velocity [m/s]"),
+    ("stop_on", "1: in contact with the moving stop"),
+    ("stop_wn2", "k_s/m_s [1/s^2]"), ("stop_cm", "c_s/m_s [1/s]"),
+    ("stop_ratio", "m/m_s; 0: rigid stop"),
+    ("stop_x_max", "largest |x_s| over the period [m]"),
 ), stride=LANES)

@@ -165,6 +165,8 @@ def _record(series, L, i):
         series[i, SERIES.x], series[i, SERIES.v] = s * L[LANE.x], s * L[LANE.v]
         series[i, SERIES.voltage], series[i, SERIES.contact_force] = (
             s * L[LANE.voltage], s * L[LANE.fc])
+        series[i, SERIES.stop_displacement] = L[LANE.stop_x]
+        series[i, SERIES.stop_velocity] = L[LANE.stop_v]
 
 
 def run_points(params, states, metrics, strobes, successors=None, on_points=None,

@@ -89,6 +89,7 @@ def reduce(acc, n, periods, p, metrics):
     """Metrics over the last ``periods`` forcing periods from the per-period accumulators."""
     q, n_imp, sum_vimp, n_low, fc_low = 0.0, 0.0, 0.0, 0.0, 0.0
     xmax, xmin, vpk, fcmax = -np.inf, np.inf, 0.0, 0.0
+    smax, peak_min, peak_max = 0.0, np.inf, -np.inf
     for i in range(periods):
         slot = (n - 1 - i) % MAX_ORBIT_PERIOD
         q += acc[slot, ACC.q]
@@ -98,6 +99,9 @@ def reduce(acc, n, periods, p, metrics):
         sum_vimp += acc[slot, ACC.sum_vimp]
         n_low += acc[slot, ACC.impacts_lower]
         fc_low = max(fc_low, acc[slot, ACC.fc_max_lower])
+        smax = max(smax, acc[slot, ACC.stop_x_max])
+        peak_min = min(peak_min, acc[slot, ACC.fc_peak_min])
+        peak_max = max(peak_max, acc[slot, ACC.fc_peak_max])
     mean_v2 = q / (max(periods, 1) * p[PARAM.period])
     metrics[METRIC.power] = mean_v2 / p[PARAM.resistance]
     metrics[METRIC.v_rms] = math.sqrt(mean_v2)
@@ -109,3 +113,7 @@ def reduce(acc, n, periods, p, metrics):
     metrics[METRIC.approach_velocity] = sum_vimp / n_imp if n_imp > 0 else np.nan
     metrics[METRIC.impacts_per_period_lower] = n_low / max(periods, 1)
     metrics[METRIC.contact_force_max_lower] = fc_low
+    metrics[METRIC.stop_displacement_max] = smax
+    # (no located peak: no impact, or contacts too short for three force samples)
+    metrics[METRIC.contact_force_spread] = peak_max - peak_min if peak_max >= peak_min \
+        else (0.0 if n_imp == 0 else np.nan)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harvester_sweep import _engine, packing, resolve_parameters
-from harvester_sweep._engine import METRIC, PARAM, STATUS, scheduler
+from harvester_sweep._engine import METRIC, PARAM, STATE, STATUS, scheduler
 
 FREQUENCIES = np.linspace(120.0, 300.0, 12)  # [Hz] through the impacting band and out
 
@@ -31,7 +31,7 @@ def _one_call_per_point(rows, rest):
     """The reference: each point in a call of its own, from the final state of the point
     before (from rest after a diverged one, nothing run for a row of no period)."""
     n = len(rows)
-    metrics, finals = np.full((n, len(METRIC)), -1.0), np.empty((n, 4))
+    metrics, finals = np.full((n, len(METRIC)), -1.0), np.empty((n, len(STATE)))
     state = rest.copy()
     for i in range(n):
         if rows[i, PARAM.max_periods] == 0:  # refused: no values, status too stiff

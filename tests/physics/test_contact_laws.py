@@ -17,7 +17,8 @@ def _impact(restitution, law="lankarani_nikravesh", mode="latched", **extra):
                            amplitude=0.0, frequency=10.0, gap=0.0, steps_per_period=100_000,
                            restitution=restitution, contact_law=law, impact_velocity_mode=mode,
                            **extra)
-    state = np.array([-1e-6, V_IN, 0.0, p["impact_velocity"]])
+    state = packing.initial_state(p)
+    state[_engine.STATE.x], state[_engine.STATE.v] = -1e-6, V_IN
     series = _engine.record_series(packing.pack_parameters(p), state, 1)
     step = 1.0 / (p["frequency"] * p["steps_per_period"])
     return p, series, step

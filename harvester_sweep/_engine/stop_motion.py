@@ -1,0 +1,246 @@
+"""A stop that moves: the upper stop on a spring and damper, fixed to the base.
+
+State ``(x, v, V, x_s, v_s)``: the tip's (layouts.STATE) and the stop's displacement
+relative to the base [m] and velocity [m/s]. The stop feels the base's acceleration
+as the tip does, and the contact force the other way::
+
+    x''   = A sin(w t) - wn^2 x - (c/m) x' + (theta/m) V - F_c / m
+    x_s'' = A sin(w t) - (k_s/m_s) x_s - (c_s/m_s) x_s' + F_c / m_s
+    F_c   = k_h delta^1.5 max(1 + c_h (x' - x_s'), 0),   delta = max(x - g - x_s, 0)
+
+The contact's switches are those of the rigid stop with the relative motion in place of
+the tip's: ``x - x_s = g`` (touch, separation) and ``1 + c_h (x' - x_s') = 0`` (the
+no-tension clip). A lane holding a moving stop takes every step here, in scalar code
+(lanes.load marks it so), so that the lane loop of the rigid stop carries none of it:
+the trial step of the lane loop is dropped and the step taken again from its start, in
+quarter steps while in contact, every switch located inside the step as in :mod:`.rk4`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from . import hermite
+from .flags import JIT
+from .layouts import LANE
+from .model import voltage_rate
+from .rk4 import GRADED, THETA_TOL, WHOLE, forcing
+
+#: The coefficients of a point with a moving stop: the tip's (model.Coefficients) and
+#: k_s/m_s [1/s^2], c_s/m_s [1/s], m/m_s [-].
+Coefficients = namedtuple("Coefficients", ("wn2", "cm", "thm", "khm", "g", "ch", "irc", "thc",
+                                           "swn2", "scm", "ratio"))
+
+# Sub-step fractions of a step in contact: four quarters.
+QUARTERS = np.array([0.25, 0.25, 0.25, 0.25])
+
+
+@njit(inline="always", **JIT)
+def derivatives(x, v, V, xs, vs, f, k, on):
+    """Accelerations of the tip and the stop [m/s^2] and dV/dt [V/s] at forcing ``f``
+    [m/s^2]; ``on`` 1 in contact, 0 out of it."""
+    d = max(x - xs - k.g, 0.0)
+    fm = on * k.khm * d * math.sqrt(d) * max(1.0 + k.ch * (v - vs), 0.0)  # F_c / m
+    a = f - k.wn2 * x + k.thm * V - k.cm * v - fm
+    a_s = f - k.swn2 * xs - k.scm * vs + fm * k.ratio
+    return a, a_s, -k.irc * V - k.thc * v
+
+
+@njit(inline="always", **JIT)
+def force(x, v, xs, vs, kh_on, g, ch):
+    """Contact force F_c [N]; ``kh_on`` is k_h [N/m^1.5] in contact, 0 out of it."""
+    d = max(x - xs - g, 0.0)
+    return kh_on * d * math.sqrt(d) * max(1.0 + ch * (v - vs), 0.0)
+
+
+@njit(**JIT)
+def rk4(x, v, V, xs, vs, dt, f0, fm, f1, k, on):
+    """One classical RK4 step of length dt [s] with forcing f0, fm, f1 [m/s^2] at its
+    start, middle and end; returns the state at its end and int V^2 dt [V^2 s]."""
+    hh, h6 = 0.5 * dt, dt / 6.0
+    a1, b1, e1 = derivatives(x, v, V, xs, vs, f0, k, on)
+    x2, v2, V2, s2, u2 = x + hh * v, v + hh * a1, V + hh * e1, xs + hh * vs, vs + hh * b1
+    a2, b2, e2 = derivatives(x2, v2, V2, s2, u2, fm, k, on)
+    x3, v3, V3, s3, u3 = x + hh * v2, v + hh * a2, V + hh * e2, xs + hh * u2, vs + hh * b2
+    a3, b3, e3 = derivatives(x3, v3, V3, s3, u3, fm, k, on)
+    x4, v4, V4, s4, u4 = x + dt * v3, v + dt * a3, V + dt * e3, xs + dt * u3, vs + dt * b3
+    a4, b4, e4 = derivatives(x4, v4, V4, s4, u4, f1, k, on)
+    return (x + h6 * (v + 2.0 * (v2 + v3) + v4), v + h6 * (a1 + 2.0 * (a2 + a3) + a4),
+            V + h6 * (e1 + 2.0 * (e2 + e3) + e4), xs + h6 * (vs + 2.0 * (u2 + u3) + u4),
+            vs + h6 * (b1 + 2.0 * (b2 + b3) + b4),
+            h6 * (V * V + 2.0 * (V2 * V2 + V3 * V3) + V4 * V4))
+
+
+@njit(**JIT)
+def pieces(y, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, on):
+    """RK4 over the fraction [start, start + length] of a step of h [s] (forcing phase
+    sin, cos = s0, c0 at its start) in sub-steps of ``fractions`` of ``length``, reversed
+    when ``reverse``. ``y`` is (x, v, V, x_s, v_s); returns the end state and int V^2 dt."""
+    w = math.pi / n_steps  # forcing phase per half step
+    x, v, V, xs, vs = y
+    q, at = 0.0, start
+    f0 = forcing(A, s0, c0, 2.0 * w * at)
+    n = fractions.shape[0]
+    for i in range(n):
+        dt = (fractions[n - 1 - i] if reverse else fractions[i]) * length
+        f1 = forcing(A, s0, c0, 2.0 * w * (at + dt))
+        x, v, V, xs, vs, dq = rk4(x, v, V, xs, vs, dt * h,
+                                  f0, forcing(A, s0, c0, w * (2.0 * at + dt)), f1, k, on)
+        q += dq
+        at += dt
+        f0 = f1
+    return (x, v, V, xs, vs), q
+
+
+@njit(inline="always", **JIT)
+def _with_damping(k, ch):
+    """``k`` with the contact damping c_h = ``ch`` [s/m]."""
+    return Coefficients(k.wn2, k.cm, k.thm, k.khm, k.g, ch, k.irc, k.thc, k.swn2, k.scm,
+                        k.ratio)
+
+
+@njit(inline="always", **JIT)
+def _touching(y, k):
+    """Whether the stop pushes at state ``y``: past both contact surfaces."""
+    x, v, _, xs, vs = y
+    return (x - xs > k.g) & (1.0 + k.ch * (v - vs) > 0.0)
+
+
+@njit(**JIT)
+def _switch(y, yn, s0, c0, n_steps, h, A, k, on):
+    """The earliest contact switch inside the step from ``y`` to ``yn`` (taken with
+    contact state ``on``): 1 on x - x_s = g, 2 on 1 + c_h (v - v_s) = 0, 0 already
+    across at the start; its time as a fraction of the step, first on the cubic Hermite
+    interpolant of the relative motion, then by Newton on RK4 sub-steps (rk4.switch_step
+    for the rigid stop)."""
+    x, v, V, xs, vs = y
+    xn, vn, Vn, xsn, vsn = yn
+    w = math.pi / n_steps
+    d0, d1, r0, r1 = x - xs - k.g, xn - xsn - k.g, v - vs, vn - vsn
+    theta, kind = 2.0, 0
+    if d0 * d1 < 0.0:
+        theta, kind = hermite.root(d0, r0, d1, r1, h, 0.0), 1
+    if (1.0 + k.ch * r0) * (1.0 + k.ch * r1) < 0.0:
+        a0, b0, _ = derivatives(x, v, V, xs, vs, A * s0, k, on)
+        a1, b1, _ = derivatives(xn, vn, Vn, xsn, vsn, forcing(A, s0, c0, 2.0 * w), k, on)
+        s2 = hermite.root(r0, a0 - b0, r1, a1 - b1, h, -1.0 / k.ch)
+        if s2 < theta:
+            theta, kind = s2, 2
+    if kind == 0:
+        return 0, 0.0
+    for _ in range(4):  # Newton on the sub-step length
+        f1 = forcing(A, s0, c0, 2.0 * w * theta)
+        e = rk4(x, v, V, xs, vs, theta * h, A * s0, forcing(A, s0, c0, w * theta), f1, k, on)
+        if kind == 1:
+            residual, rate = e[0] - e[3] - k.g, e[1] - e[4]
+        else:
+            a, b, _ = derivatives(e[0], e[1], e[2], e[3], e[4], f1, k, on)
+            residual, rate = 1.0 + k.ch * (e[1] - e[4]), k.ch * (a - b)
+        if rate == 0.0:
+            break
+        step = residual / (rate * h)
+        theta = min(max(theta - step, 0.0), 1.0)
+        if abs(step) <= THETA_TOL:
+            break
+    return kind, theta
+
+
+@njit(**JIT)
+def step(L, j):
+    """Take lane ``j``'s step with its moving stop from the step's start, and book its
+    extrema, impacts and force peaks (as lanes.finish_step does for a rigid stop)."""
+    x, v, V = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j]
+    xs, vs, on = L[LANE.stop_x + j], L[LANE.stop_v + j], L[LANE.stop_on + j]
+    s0, c0, ch = L[LANE.sin + j], L[LANE.cos + j], L[LANE.ch + j]
+    A, h, n_steps, g = L[LANE.amplitude + j], L[LANE.h + j], L[LANE.steps + j], L[LANE.gap + j]
+    latch, kh = L[LANE.latch + j], L[LANE.kh + j]
+    irc, thc = L[LANE.irc + j], L[LANE.thc + j]
+    k = Coefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j], L[LANE.khm + j], g, ch,
+                     irc, thc, L[LANE.stop_wn2 + j], L[LANE.stop_cm + j],
+                     L[LANE.stop_ratio + j])
+    y = (x, v, V, xs, vs)
+    if L[LANE.locate + j] == 0.0:  # plain fixed steps: the force always on, clipped
+        if latch > 0.0 and x - xs <= g and v - vs > 0.0:  # predicted approach velocity
+            ch = latch / (v - vs)
+            k = _with_damping(k, ch)
+        yn, dq = pieces(y, 0.0, 1.0, WHOLE, False, s0, c0, n_steps, h, A, k, 1.0)
+        d0, d1 = x - xs - g, yn[0] - yn[3] - g
+        if d0 <= 0.0 < d1:  # first touch, on the cubic Hermite interpolant
+            v_on = hermite.crossing_rate(d0, v - vs, d1, yn[1] - yn[4], h, 0.0)
+            _impact(L, j, v_on)
+            if latch > 0.0 and v_on > 0.0:
+                ch = latch / v_on
+        on = 1.0
+    else:
+        yn, dq = pieces(y, 0.0, 1.0, QUARTERS if on == 1.0 else WHOLE, False, s0, c0,
+                        n_steps, h, A, k, on)
+        if _touching(yn, k) != (on == 1.0):
+            kind, theta = _switch(y, yn, s0, c0, n_steps, h, A, k, on)
+            # up to the switch with the old contact state (graded towards a separation)...
+            graded = on == 1.0 and kind == 1
+            ye, q1 = pieces(y, 0.0, theta, GRADED if graded else WHOLE, True, s0, c0,
+                            n_steps, h, A, k, on)
+            onset = on == 0.0 and kind == 1
+            if onset:
+                v_on = ye[1] - ye[4]
+                _impact(L, j, v_on)
+                if latch > 0.0 and v_on > 0.0:
+                    ch = latch / v_on
+                    k = _with_damping(k, ch)
+            on = 1.0 - on
+            # ... and after it with the new one (graded from a touch)
+            yn, q2 = pieces(ye, theta, 1.0 - theta, GRADED if onset else WHOLE, False, s0, c0,
+                            n_steps, h, A, k, on)
+            dq = q1 + q2
+    xn, vn, Vn, xsn, vsn = yn
+    if v > 0.0 >= vn or v < 0.0 <= vn:
+        xe = hermite.extremum(x, v, xn, vn, h)
+        L[LANE.x_max + j], L[LANE.x_min + j] = (max(L[LANE.x_max + j], xe),
+                                                min(L[LANE.x_min + j], xe))
+    dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
+    if (dV > 0.0) != (dVn > 0.0):
+        L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(hermite.extremum(V, dV, Vn, dVn, h)))
+    smax = max(L[LANE.stop_x_max + j], abs(xsn))
+    if vs > 0.0 >= vsn or vs < 0.0 <= vsn:
+        smax = max(smax, abs(hermite.extremum(xs, vs, xsn, vsn, h)))
+    L[LANE.stop_x_max + j] = smax
+    fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
+    fcn = force(xn, vn, xsn, vsn, on * kh, g, ch)
+    if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
+        peak(L, j, fcp, fc, fcn, True)
+    L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
+    L[LANE.stop_x + j], L[LANE.stop_v + j], L[LANE.stop_on + j] = xsn, vsn, on
+    L[LANE.fc_previous + j], L[LANE.fc + j], L[LANE.ch + j] = fc, fcn, ch
+    L[LANE.q + j] += dq
+    L[LANE.x_max + j], L[LANE.x_min + j] = (max(L[LANE.x_max + j], x, xn),
+                                            min(L[LANE.x_min + j], x, xn))
+    L[LANE.v_max + j] = max(L[LANE.v_max + j], abs(vn))
+    L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(V), abs(Vn))
+    L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
+
+
+@njit(inline="always", **JIT)
+def _impact(L, j, v_on):
+    """A first touch at approach velocity ``v_on`` [m/s] (relative to the stop)."""
+    L[LANE.impacts + j] += 1.0
+    L[LANE.sum_vimp + j] += v_on
+    if L[LANE.latch + j] > 0.0 and v_on > 0.0:
+        L[LANE.vimp + j] = v_on
+
+
+@njit(inline="always", **JIT)
+def peak(L, j, fcp, fc, fcn, upper):
+    """Book the peak of a contact force sampled fcp, fc, fcn [N] at three step ends,
+    fc the largest: the vertex of the parabola through them; among the upper stop's peaks
+    when ``upper``."""
+    a = 0.5 * (fcp + fcn) - fc
+    b = 0.5 * (fcn - fcp)
+    top = fc - b * b / (4.0 * a)
+    L[LANE.fc_max + j] = max(L[LANE.fc_max + j], top)
+    if upper:
+        L[LANE.fc_peak_min + j] = min(L[LANE.fc_peak_min + j], top)
+        L[LANE.fc_peak_max + j] = max(L[LANE.fc_peak_max + j], top)
