@@ -176,8 +176,10 @@ def step(L, j):
                 ch = latch / v_on
         on = 1.0
     else:
-        yn, dq = pieces(y, 0.0, 1.0, QUARTERS if on == 1.0 else WHOLE, False, s0, c0,
-                        n_steps, h, A, k, on)
+        if on == 1.0:
+            yn, dq = pieces(y, 0.0, 1.0, QUARTERS, False, s0, c0, n_steps, h, A, k, on)
+        else:  # apart, the tip's step is the lane loop's trial step; the stop's is its own
+            yn, dq = _apart(L, j, y, k)
         if _touching(yn, k) != (on == 1.0):
             kind, theta = _switch(y, yn, s0, c0, n_steps, h, A, k, on)
             # up to the switch with the old contact state (graded towards a separation)...
@@ -221,6 +223,34 @@ def step(L, j):
     L[LANE.v_max + j] = max(L[LANE.v_max + j], abs(vn))
     L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(V), abs(Vn))
     L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
+
+
+@njit(inline="always", **JIT)
+def _apart(L, j, y, k):
+    """The step of lane ``j`` from ``y`` with tip and stop apart: the tip's is the lane
+    loop's trial step (the contact-free map of the rigid stop's lanes, its RK4 step to
+    rounding), the stop's an RK4 step of its own linear equation, forced as the tip is;
+    int V^2 dt from the step's ends, as the lane loop takes it."""
+    x, v, V, xs, vs = y
+    s0, c0 = L[LANE.sin + j], L[LANE.cos + j]
+    A, ca, sa, h = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j], L[LANE.h + j]
+    sm = s0 * ca + c0 * sa
+    s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+    f0, fm, f1 = A * s0, A * sm, A * s1
+    hh, h6 = 0.5 * h, h / 6.0
+    b1 = f0 - k.swn2 * xs - k.scm * vs
+    s2, u2 = xs + hh * vs, vs + hh * b1
+    b2 = fm - k.swn2 * s2 - k.scm * u2
+    s3, u3 = xs + hh * u2, vs + hh * b2
+    b3 = fm - k.swn2 * s3 - k.scm * u3
+    s4, u4 = xs + h * u3, vs + h * b3
+    b4 = f1 - k.swn2 * s4 - k.scm * u4
+    xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
+    dq = hermite.v2_integral(V, voltage_rate(V, v, k.irc, k.thc), Vn,
+                             voltage_rate(Vn, vn, k.irc, k.thc), L[LANE.half_h + j],
+                             L[LANE.h2_6 + j])
+    return ((xn, vn, Vn, xs + h6 * (vs + 2.0 * (u2 + u3) + u4),
+             vs + h6 * (b1 + 2.0 * (b2 + b3) + b4)), dq)
 
 
 @njit(inline="always", **JIT)
