@@ -28,6 +28,14 @@ def phasor(mass, natural_frequency, damping_ratio, coupling, capacitance, resist
     return X, V
 
 
+def beam(p):
+    """The beam's mass m [kg], stiffness k [N/m], damping c [N s/m] and the forcing's
+    angular frequency w [rad/s] of parameter set ``p``."""
+    wn = 2 * math.pi * p["natural_frequency"]
+    return (p["mass"], p["mass"] * wn**2, 2 * p["damping_ratio"] * p["mass"] * wn,
+            2 * math.pi * p["frequency"])
+
+
 def lankarani_nikravesh_damping(restitution, impact_velocity):
     """c_h = 3 (1 - e^2) / (4 v_imp) [s/m]."""
     return 3 * (1 - restitution**2) / (4 * impact_velocity)

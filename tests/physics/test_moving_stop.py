@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from harvester_sweep import ParameterError, resolve_parameters, run_scene
-from tests.helpers import lankarani_nikravesh_damping
+from tests.helpers import beam, lankarani_nikravesh_damping
 
 
 def support(mass, frequency, damping_ratio):
@@ -35,10 +35,7 @@ class MovingStop:
 
     def __init__(self, p):
         self.p = p
-        wn = 2 * math.pi * p["natural_frequency"]
-        self.m, self.k = p["mass"], p["mass"] * wn**2
-        self.c = 2 * p["damping_ratio"] * p["mass"] * wn
-        self.w = 2 * math.pi * p["frequency"]
+        self.m, self.k, self.c, self.w = beam(p)
         self.ch = lankarani_nikravesh_damping(p["restitution"], p["impact_velocity"])
         self.onsets = 0
 

@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from harvester_sweep import run_scene
-from tests.helpers import lankarani_nikravesh_damping
+from tests.helpers import beam, lankarani_nikravesh_damping
 
 # An asymmetric pair of stops (the lower one softer, more lossy and further away) on which
 # the paper scene settles on an orbit of two forcing periods, striking each stop once a
@@ -25,10 +25,7 @@ class TwoStops:
 
     def __init__(self, p):
         self.p = p
-        wn = 2 * math.pi * p["natural_frequency"]
-        self.m, self.k = p["mass"], p["mass"] * wn**2
-        self.c = 2 * p["damping_ratio"] * p["mass"] * wn
-        self.w = 2 * math.pi * p["frequency"]
+        self.m, self.k, self.c, self.w = beam(p)
         self.upper = (p["gap"], p["hertz_stiffness"],
                       lankarani_nikravesh_damping(p["restitution"], p["impact_velocity"]))
         self.lower = (p["lower_gap"], p["lower_hertz_stiffness"],
