@@ -12,20 +12,21 @@ final states. One concept per module:
 - ``hermite``: the cubic Hermite interpolant of a step (extrema, crossings, int V^2 dt);
 - ``rk4``: RK4 over parts of a step and contact switches located inside it;
 - ``steady``: orbit periods from the stroboscopic samples, metrics of the last orbit;
+- ``booking``: what a step finished in scalar code books (touches, extrema, force peaks);
 - ``stop_motion``: a stop on a spring, stepped in scalar code;
 - ``lanes``: the lane table, its vector step loop and the scalar finish of marked steps;
 - ``scheduler``: lines, the shared queue, threads and progress (:func:`run_points`);
 - ``cache``: numba's on-disk cache kept in step with this source.
 """
 
-from . import cache, hermite, lanes, model, rk4, scheduler, steady, stop_motion
+from . import booking, cache, hermite, lanes, model, rk4, scheduler, steady, stop_motion
 from .cache import SOURCE_DIGEST
 from .layouts import LANE, LANES, METRIC, N_RIGID, N_STROBE, NO_STOP, PARAM, SERIES, STATE, STATUS
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
-cache.flush_if_changed(scheduler._run_threads, (hermite, lanes, model, rk4, scheduler, steady,
-                                                 stop_motion))
+cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, model, rk4, scheduler,
+                                                 steady, stop_motion))
 
 
 def cache_warm() -> bool:

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-from . import hermite, steady, stop_motion
+from . import booking, hermite, steady, stop_motion
 from .flags import JIT
 from .layouts import (
     ACC,
@@ -537,12 +537,7 @@ def _finish_rigid(L, j):
                 x, v, V, h, A * s0, A * sm, A * s1, Coefficients(wn2, cm, thm, khm, g, ch, irc, thc)
             )
         if x <= g < xn:  # first touch, on the cubic Hermite interpolant
-            v_on = hermite.crossing_rate(x, v, xn, vn, h, g)
-            L[LANE.impacts + j] += 1.0
-            L[LANE.sum_vimp + j] += v_on
-            if latch > 0.0 and v_on > 0.0:
-                L[LANE.vimp + j] = v_on
-                ch = latch / v_on
+            ch = booking.impact(L, j, hermite.crossing_rate(x, v, xn, vn, h, g), ch)
     elif in_contact(xn, vn, g, ch) != (on == 1.0):
         before = Coefficients(wn2, cm, thm, on * khm, g, ch, irc, thc)  # the old contact state
         a0, _ = derivatives(x, v, V, A * s0, before)
@@ -570,11 +565,7 @@ def _finish_rigid(L, j):
             )
         onset = on == 0.0 and kind == 1
         if onset:
-            L[LANE.impacts + j] += 1.0
-            L[LANE.sum_vimp + j] += ve
-            if latch > 0.0 and ve > 0.0:
-                L[LANE.vimp + j] = ve
-                ch = latch / ve
+            ch = booking.impact(L, j, ve, ch)
         on = 1.0 - on
         # ... and after it with the new one (graded from a touch).
         after = Coefficients(wn2, cm, thm, on * khm, g, ch, irc, thc)
@@ -597,33 +588,14 @@ def _finish_rigid(L, j):
         fine = 3.0 if onset else 0.0
     elif _quarter(L, j):  # the trial step was taken in quarter steps (quarter_steps)
         fine = max(fine - 1.0, 0.0)
-    dVn = voltage_rate(Vn, vn, irc, thc)
-    if v > 0.0 >= vn or v < 0.0 <= vn:
-        xe = hermite.extremum(x, v, xn, vn, h)
-        L[LANE.x_max + j], L[LANE.x_min + j] = (
-            max(L[LANE.x_max + j], xe),
-            min(L[LANE.x_min + j], xe),
-        )
-    if (dV > 0.0) != (dVn > 0.0):
-        L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(hermite.extremum(V, dV, Vn, dVn, h)))
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
-    if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
-        stop_motion.peak(L, j, fcp, fc, fcn, L[LANE.sign + j] > 0.0)
+    booking.extrema(L, j, x, v, V, dV, xn, vn, Vn, voltage_rate(Vn, vn, irc, thc), h, fcp, fc,
+                    fcn, L[LANE.sign + j] > 0.0)
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
     L[LANE.fc_previous + j], L[LANE.fc + j] = fc, fcn
     L[LANE.on + j], L[LANE.ch + j], L[LANE.fine + j] = on, ch, fine
     L[LANE.q + j] += dq
-    # both ends of the step: the ends of the runs of plain steps (see _commit_steps)
-    L[LANE.x_max + j], L[LANE.x_min + j] = (
-        max(L[LANE.x_max + j], x, xn),
-        min(L[LANE.x_min + j], x, xn),
-    )
-    L[LANE.v_max + j], L[LANE.v_peak + j] = (
-        max(L[LANE.v_max + j], abs(vn)),
-        max(L[LANE.v_peak + j], abs(V), abs(Vn)),
-    )
-    L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
     if xn < L[LANE.flip_below + j]:  # nearer the other stop (out of this one's reach)
         mirror(L, j)
 

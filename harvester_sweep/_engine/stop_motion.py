@@ -24,7 +24,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from . import hermite
+from . import booking, hermite
 from .flags import JIT
 from .layouts import LANE
 from .model import voltage_rate
@@ -170,10 +170,8 @@ def step(L, j):
         yn, dq = pieces(y, 0.0, 1.0, WHOLE, False, s0, c0, n_steps, h, A, k, 1.0)
         d0, d1 = x - xs - g, yn[0] - yn[3] - g
         if d0 <= 0.0 < d1:  # first touch, on the cubic Hermite interpolant
-            v_on = hermite.crossing_rate(d0, v - vs, d1, yn[1] - yn[4], h, 0.0)
-            _impact(L, j, v_on)
-            if latch > 0.0 and v_on > 0.0:
-                ch = latch / v_on
+            ch = booking.impact(L, j, hermite.crossing_rate(d0, v - vs, d1, yn[1] - yn[4], h,
+                                                            0.0), ch)
         on = 1.0
     else:
         if on == 1.0:
@@ -188,41 +186,26 @@ def step(L, j):
                             n_steps, h, A, k, on)
             onset = on == 0.0 and kind == 1
             if onset:
-                v_on = ye[1] - ye[4]
-                _impact(L, j, v_on)
-                if latch > 0.0 and v_on > 0.0:
-                    ch = latch / v_on
-                    k = _with_damping(k, ch)
+                ch = booking.impact(L, j, ye[1] - ye[4], ch)
+                k = _with_damping(k, ch)
             on = 1.0 - on
             # ... and after it with the new one (graded from a touch)
             yn, q2 = pieces(ye, theta, 1.0 - theta, GRADED if onset else WHOLE, False, s0, c0,
                             n_steps, h, A, k, on)
             dq = q1 + q2
     xn, vn, Vn, xsn, vsn = yn
-    if v > 0.0 >= vn or v < 0.0 <= vn:
-        xe = hermite.extremum(x, v, xn, vn, h)
-        L[LANE.x_max + j], L[LANE.x_min + j] = (max(L[LANE.x_max + j], xe),
-                                                min(L[LANE.x_min + j], xe))
-    dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
-    if (dV > 0.0) != (dVn > 0.0):
-        L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(hermite.extremum(V, dV, Vn, dVn, h)))
+    fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
+    fcn = force(xn, vn, xsn, vsn, on * kh, g, ch)
+    booking.extrema(L, j, x, v, V, voltage_rate(V, v, irc, thc), xn, vn, Vn,
+                    voltage_rate(Vn, vn, irc, thc), h, fcp, fc, fcn, True)
     smax = max(L[LANE.stop_x_max + j], abs(xsn))
     if vs > 0.0 >= vsn or vs < 0.0 <= vsn:
         smax = max(smax, abs(hermite.extremum(xs, vs, xsn, vsn, h)))
     L[LANE.stop_x_max + j] = smax
-    fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
-    fcn = force(xn, vn, xsn, vsn, on * kh, g, ch)
-    if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
-        peak(L, j, fcp, fc, fcn, True)
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
     L[LANE.stop_x + j], L[LANE.stop_v + j], L[LANE.stop_on + j] = xsn, vsn, on
     L[LANE.fc_previous + j], L[LANE.fc + j], L[LANE.ch + j] = fc, fcn, ch
     L[LANE.q + j] += dq
-    L[LANE.x_max + j], L[LANE.x_min + j] = (max(L[LANE.x_max + j], x, xn),
-                                            min(L[LANE.x_min + j], x, xn))
-    L[LANE.v_max + j] = max(L[LANE.v_max + j], abs(vn))
-    L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(V), abs(Vn))
-    L[LANE.fc_max + j] = max(L[LANE.fc_max + j], fc, fcn)
 
 
 @njit(inline="always", **JIT)
@@ -251,26 +234,3 @@ def _apart(L, j, y, k):
                              L[LANE.h2_6 + j])
     return ((xn, vn, Vn, xs + h6 * (vs + 2.0 * (u2 + u3) + u4),
              vs + h6 * (b1 + 2.0 * (b2 + b3) + b4)), dq)
-
-
-@njit(inline="always", **JIT)
-def _impact(L, j, v_on):
-    """A first touch at approach velocity ``v_on`` [m/s] (relative to the stop)."""
-    L[LANE.impacts + j] += 1.0
-    L[LANE.sum_vimp + j] += v_on
-    if L[LANE.latch + j] > 0.0 and v_on > 0.0:
-        L[LANE.vimp + j] = v_on
-
-
-@njit(inline="always", **JIT)
-def peak(L, j, fcp, fc, fcn, upper):
-    """Book the peak of a contact force sampled fcp, fc, fcn [N] at three step ends,
-    fc the largest: the vertex of the parabola through them; among the upper stop's peaks
-    when ``upper``."""
-    a = 0.5 * (fcp + fcn) - fc
-    b = 0.5 * (fcn - fcp)
-    top = fc - b * b / (4.0 * a)
-    L[LANE.fc_max + j] = max(L[LANE.fc_max + j], top)
-    if upper:
-        L[LANE.fc_peak_min + j] = min(L[LANE.fc_peak_min + j], top)
-        L[LANE.fc_peak_max + j] = max(L[LANE.fc_peak_max + j], top)
