@@ -20,7 +20,8 @@ peak voltage, lam by the range), and the arclength is measured in them.
   jumped over.
 - **Bifurcations** between two accepted points are where a test function changes sign:
   a fold where ``t_lam`` does, period doubling ``det(I + M)``, Neimark-Sacker
-  ``|mu|^2 - 1`` of a complex pair of multipliers, grazing ``x_max - gap``. Each is located
+  ``|mu|^2 - 1`` of a complex pair of multipliers, grazing ``x_max - gap`` (a rigid upper
+  stop; a moving stop's grazing is not watched) and ``-lower_gap - x_min``. Each is located
   by the Illinois method on the arclength between the two points, every trial point
   corrected onto the branch, until the bracket bounds the parameter to ``LOCATE``
   relative; the located point joins the branch with its flag.
@@ -44,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _engine
-from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, PARAM, STATUS
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, NO_STOP, PARAM, STATUS
 from .linear import linear_response
 from .orbits import (PERTURBATION, ROUNDING, halving_error, monodromy, orbit_scales,
                      perturbed_copies, state_size)
@@ -74,6 +75,8 @@ STEP_SAMPLES = 9
 #: ... and on which the closed-form amplitude without the stop is looked at [-].
 SCALE_SAMPLES = 201
 PERIOD_DOUBLING = ("mark", "switch")
+#: The bifurcation (outputs.BIFURCATIONS) each test function of _Problem.tests flags.
+TESTED = ("fold", "period_doubling", "neimark_sacker", "grazing", "grazing")
 #: Defaults of the options, each in units of the parameter's range |stop - start|
 #: (step, min_step, max_step) or a count (max_points).
 DEFAULTS = {"step": 0.01, "min_step": 1e-7, "max_step": 0.05, "max_points": 2000}
@@ -124,7 +127,6 @@ class _Problem:
         self.steps = steps
         self.scale = scale
         self.D = len(scale)  # components of the period map (orbits.state_size)
-        self.gap = base["gap"]
         self.tolerance = base["settle_tolerance"]
         self._rows = {}
 
@@ -159,6 +161,7 @@ class _Problem:
             return None
         rows = np.array(rows)
         rows[:, PARAM.max_periods] = period
+        rows[1:, PARAM.book] = 0.0  # (the perturbed runs' end states alone are read)
         state = carry.copy()
         state[:self.D] = z[:self.D] * self.scale
         states = perturbed_copies(state[None, :], self.scale[None, :]) if jacobian \
@@ -233,10 +236,15 @@ class _Problem:
         mult = np.linalg.eigvals(point.monodromy)
         pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
         ns = np.abs(mult[pair][0]) ** 2 - 1 if pair.any() else math.nan
+        # the point's own stops (the continued parameter may be a gap)
+        r = self.row(self.lam(point.z), self.steps)
+        m = point.metrics
+        upper = m[METRIC.x_max] - r[PARAM.gap] if r[PARAM.stop_ratio] == 0 else math.nan
+        lower = -r[PARAM.lower_gap] - m[METRIC.x_min] if r[PARAM.lower_gap] < NO_STOP \
+            else math.nan
         point.tested = np.array([point.tangent[self.D],
                                  np.linalg.det(np.eye(self.D) + point.monodromy),
-                                 ns,
-                                 (point.metrics[METRIC.x_max] - self.gap) / self.scale[0]])
+                                 ns, upper / self.scale[0], lower / self.scale[0]])
         return point.tested
 
 
@@ -371,12 +379,14 @@ def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_
                            f"{int(results.metrics[0, METRIC.periods_run])} periods): start "
                            "where the response settles")
     m = results.metrics[0]
-    x = max(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]), abs(p0["gap"]))
+    # the nearer stop's distance: the amplitude's order once the motion strikes it
+    reach = min(abs(p0["gap"]), math.inf if p0["lower_gap"] is None else p0["lower_gap"])
+    x = max(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]), reach)
     # without a stop within reach the amplitude is the closed form's: scaled by its peak
     # over the range, a resonance is not taken in hundreds of steps of the amplitude
     free = [abs(linear_response(**resolve_parameters(preset, **{**fixed, parameter: float(v)}))[0])
             for v in np.linspace(start, stop, SCALE_SAMPLES)]
-    if p0["hertz_stiffness"] == 0 or max(free) < p0["gap"]:
+    if p0["hertz_stiffness"] == 0 or max(free) < reach:
         x = max(x, max(free))
     row = pack_parameters(p0)
     scale = orbit_scales(row, x, m[METRIC.v_peak], state_size(row[None]))
@@ -436,13 +446,13 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
             continue
         located = []
         tests_a, tests_b = problem.tests(a), problem.tests(b)
-        for k in range(1, len(BIFURCATIONS)):
-            if tests_a[k - 1] * tests_b[k - 1] < 0:
-                found = _locate(problem, a, b, ds, lambda pt, k=k: problem.tests(pt)[k - 1],
-                                tests_a[k - 1], tests_b[k - 1])
+        for k, kind in enumerate(TESTED):
+            if tests_a[k] * tests_b[k] < 0:
+                found = _locate(problem, a, b, ds, lambda pt, k=k: problem.tests(pt)[k],
+                                tests_a[k], tests_b[k])
                 if found is not None:
                     s, point = found
-                    point.bifurcation = k
+                    point.bifurcation = list(BIFURCATIONS).index(kind)
                     point.arclength = a.arclength + s
                     located.append((s, point))
         lam = problem.lam(b.z)

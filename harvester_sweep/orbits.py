@@ -308,6 +308,9 @@ class _Points:
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
         k = len(newton) * (self.D + 1)
+        copies = np.arange(len(owners)) < k
+        copies[:k:self.D + 1] = False
+        rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
         rows[k:k + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
         rows[k + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))

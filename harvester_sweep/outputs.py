@@ -103,7 +103,8 @@ BIFURCATIONS = {
     "fold": "the branch turns back in the parameter: a Floquet multiplier passes +1",
     "period_doubling": "a Floquet multiplier passes -1: an orbit of twice the period is born",
     "neimark_sacker": "a complex pair of Floquet multipliers passes the unit circle",
-    "grazing": "the orbit's x_max reaches the gap: contact switches on or off",
+    "grazing": "the orbit's x_max reaches a rigid stop's gap, or its x_min the lower stop: "
+               "contact switches on or off",
 }
 BIFURCATION_FLAGS = {"flag_values": np.arange(len(BIFURCATIONS), dtype="i1"),
                      "flag_meanings": " ".join(BIFURCATIONS)}

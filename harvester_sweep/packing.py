@@ -56,6 +56,7 @@ def pack_parameters(p: dict) -> np.ndarray:
         row[PARAM.stop_wn2] = p["stop_support_stiffness"] / ms
         row[PARAM.stop_cm] = p["stop_support_damping"] / ms
         row[PARAM.stop_ratio] = m / ms
+    row[PARAM.book] = 1.0  # (every metric)
     return row
 
 

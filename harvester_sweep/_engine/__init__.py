@@ -21,7 +21,19 @@ final states. One concept per module:
 
 from . import booking, cache, hermite, lanes, model, rk4, scheduler, steady, stop_motion
 from .cache import SOURCE_DIGEST
-from .layouts import LANE, LANES, METRIC, N_RIGID, N_STROBE, NO_STOP, PARAM, SERIES, STATE, STATUS
+from .layouts import (
+    BOOKED_METRICS,
+    LANE,
+    LANES,
+    METRIC,
+    N_RIGID,
+    N_STROBE,
+    NO_STOP,
+    PARAM,
+    SERIES,
+    STATE,
+    STATUS,
+)
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
@@ -35,6 +47,7 @@ def cache_warm() -> bool:
 
 
 __all__ = [
+    "BOOKED_METRICS",
     "LANE",
     "LANES",
     "MAX_ORBIT_PERIOD",

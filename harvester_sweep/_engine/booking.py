@@ -47,14 +47,16 @@ def extrema(L, j, x, v, V, dV, xn, vn, Vn, dVn, h, fcp, fc, fcn, upper):
     (dV, dVn: dV/dt at its ends [V/s]): of x and V inside it on the cubic Hermite
     interpolant, a contact-force peak (fcp, fc, fcn [N]: the force a step before its start,
     at its start and at its end), and both ends (the ends of the runs of plain steps, see
-    lanes._commit_steps)."""
-    if v > 0.0 >= vn or v < 0.0 <= vn:
+    lanes._commit_steps). The extrema inside and the force peak only where the lane books
+    them (LANE.turn_floor 0: see layouts.BOOKED_METRICS)."""
+    turns = L[LANE.turn_floor + j] == 0.0
+    if turns and (v > 0.0 >= vn or v < 0.0 <= vn):
         xe = hermite.extremum(x, v, xn, vn, h)
         L[LANE.x_max + j], L[LANE.x_min + j] = (max(L[LANE.x_max + j], xe),
                                                 min(L[LANE.x_min + j], xe))
-    if (dV > 0.0) != (dVn > 0.0):
+    if turns and (dV > 0.0) != (dVn > 0.0):
         L[LANE.v_peak + j] = max(L[LANE.v_peak + j], abs(hermite.extremum(V, dV, Vn, dVn, h)))
-    if fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
+    if turns and fcp > 0.0 and fc >= fcp and fc > fcn:  # parabola through the peak
         peak(L, j, fcp, fc, fcn, upper)
     L[LANE.x_max + j], L[LANE.x_min + j] = (max(L[LANE.x_max + j], x, xn),
                                             min(L[LANE.x_min + j], x, xn))

@@ -26,6 +26,7 @@ from .flags import JIT
 from .layouts import (
     ACC,
     BLOCK,
+    BOOKED_METRICS,
     GROUP,
     LANE,
     LANES,
@@ -110,6 +111,7 @@ def load(L, j, p, y, it):
         for c in range(5):
             L[row + c * LANES + j] = m[r, c]
     L[LANE.steps + j], L[LANE.locate + j] = n_steps, p[PARAM.locate]
+    L[LANE.turn_floor + j] = 0.0 if p[PARAM.book] != 0.0 else -np.inf
     L[LANE.phase + j] = p[PARAM.phase]
     x, v, V = y[STATE.x], y[STATE.v], y[STATE.voltage]
     vimp = y[STATE.approach_velocity]
@@ -329,7 +331,8 @@ def _commit_steps(L, contact, it):
         irc, thc = L[LANE.irc + j], L[LANE.thc + j]
         dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
         dq = hermite.v2_integral(V, dV, Vn, dVn, L[LANE.half_h + j], L[LANE.h2_6 + j])
-        need = ((v * vn <= 0.0) | (dV * dVn <= 0.0) | (it >= L[LANE.k_end + j])
+        turn = L[LANE.turn_floor + j]
+        need = ((v * vn <= turn) | (dV * dVn <= turn) | (it >= L[LANE.k_end + j])
                 | (xn < L[LANE.flip_below + j]))
         if contact:
             on, h = L[LANE.on + j], L[LANE.h + j]
@@ -348,7 +351,8 @@ def _commit_steps(L, contact, it):
                 )
             )
             need = (
-                need | switch | touch | predict | quarter | ((fcp > 0.0) & (fc >= fcp) & (fc > fcn))
+                need | switch | touch | predict | quarter
+                | ((fcp > -L[LANE.turn_floor + j]) & (fc >= fcp) & (fc > fcn))
             )
             quarters += 1 if quarter else 0
             L[LANE.fc_previous + j], L[LANE.fc + j] = fcp if need else fc, fc if need else fcn
@@ -692,6 +696,8 @@ def output(L, j, p, y, metrics, strobe, ring, acc, ring_len, status, orbit):
     metrics[METRIC.orbit_period] = orbit
     metrics[METRIC.status] = status
     metrics[METRIC.periods_run] = n
+    for c in BOOKED_METRICS:
+        metrics[c] = metrics[c] if p[PARAM.book] != 0.0 else np.nan
     if status == STATUS.diverged:
         metrics[:N_VALUES] = np.nan
 

@@ -69,6 +69,8 @@ PARAM = _layout("ParameterRow", (
     ("stop_wn2", "k_s/m_s of the stop's support [1/s^2]"),
     ("stop_cm", "c_s/m_s of the stop's support [1/s]"),
     ("stop_ratio", "m/m_s, tip mass over stop mass; 0: a rigid stop [-]"),
+    ("book", "1: every metric booked; 0: only the power, impacts and end state (see "
+             "BOOKED_METRICS) [-]"),
 ))
 #: PARAM.lower_gap of a point without a lower stop [m]: far beyond any motion, finite
 #: (the kernel's arithmetic stays finite).
@@ -96,6 +98,13 @@ METRIC = _layout("MetricRow", (
 ))
 #: The metrics that are NaN for a point without a trustworthy orbit (diverged, refused).
 N_VALUES = METRIC.orbit_period
+
+#: The metrics a point booked without its extrema and force peaks (PARAM.book 0) lacks,
+#: NaN: each is placed inside a step that the lane loop marks for scalar code. Runs whose
+#: end states alone are read (a Newton iterate's perturbed copies) skip them.
+BOOKED_METRICS = (METRIC.v_peak, METRIC.power_peak, METRIC.x_max, METRIC.x_min,
+                  METRIC.contact_force_max, METRIC.contact_force_max_lower,
+                  METRIC.contact_force_spread)
 
 #: Outcome codes of a point (metric ``status``).
 STATUS = namedtuple("Status", ("settled", "not_settled", "diverged", "too_stiff"))(0, 1, 2, 3)
@@ -191,6 +200,10 @@ LANE = _layout("LaneTable", (
     ("steps", "steps per period"),
     ("locate", "1: contact switches located"),
     ("flip_below", "the lane mirrors when x falls below this: half way to the other stop [m]"),
+    # whether the lane books extrema and force peaks (PARAM.book): a step is marked for an
+    # extremum where v vn or dV/dt dVn/dt is at most turn_floor, for a force peak where
+    # the force a step before the peak exceeds -turn_floor
+    ("turn_floor", "0: extrema and force peaks booked; -inf: not"),
     # ... the contact-free step as the linear map it is (model.free_step_map): the
     # increments of x, v, V (rows) from (x, v, V, sin, cos) at its start (columns) ...
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),

@@ -3,8 +3,8 @@
 import numba
 import numpy as np
 
-from harvester_sweep import _engine, packing, resolve_parameters, run_scene
-from harvester_sweep._engine import METRIC
+from harvester_sweep import _engine, packing, resolve_parameters, run_scene, run_sweep
+from harvester_sweep._engine import BOOKED_METRICS, METRIC, PARAM
 from harvester_sweep.results import solve
 
 
@@ -79,3 +79,46 @@ def test_order_of_points_changes_no_bits():
     for metrics, states in runs[1:]:
         np.testing.assert_array_equal(metrics, runs[0][0])
         np.testing.assert_array_equal(states, runs[0][1])
+
+
+def test_sweep_power_whatever_the_outputs_stored():
+    """A sweep's power does not depend on which other outputs it stores: every run whose
+    metrics are read books every metric (a run that books fewer rounds differently)."""
+    grid = {"gap": [0.5e-6, 2e-6], "frequency": [130.0, 145.0, 160.0]}
+
+    def sweep(outputs):
+        return run_sweep({"preset": "paper", "grid": grid,
+                          "sweep": {"outputs": outputs, "error_estimate": "all"}},
+                         progress=False)
+
+    alone = sweep(["power"])
+    every = sweep(["power", "x_max", "contact_force_max", "contact_force_spread"])
+    assert (every.contact_force_max > 0).any()  # (the stop is struck)
+    for name in ("power", "error_estimate", "floquet_multipliers_real", "rk4_steps"):
+        np.testing.assert_array_equal(alone[name].values, every[name].values)
+
+
+def test_runs_without_booking_round_alike():
+    """A run that books no extrema or force peaks (Newton's perturbed copies) follows the
+    same motion to rounding, with the same impacts and power, and its extrema and force
+    metrics NaN rather than wrong."""
+    points = [resolve_parameters("paper", gap=g, frequency=f, max_periods=4,
+                                 settle_tolerance=1e-300)
+              for g in (0.5e-6, 2e-6, 1.0) for f in (130.0, 160.0, 200.0)]
+    rows = np.array([packing.pack_parameters(p) for p in points])
+    ends = {}
+    for book in (1.0, 0.0):
+        rows[:, PARAM.book] = book
+        states = np.array([packing.initial_state(p) for p in points])
+        metrics = np.empty((len(points), len(METRIC)))
+        _engine.run_points(rows, states, metrics, np.empty((len(points), 0, 3)), settle=False)
+        ends[book] = states, metrics
+    (booked, m1), (plain, m0) = ends[1.0], ends[0.0]
+    scale = np.abs(booked[:, :3]).max(axis=0)
+    np.testing.assert_allclose(plain[:, :3] / scale, booked[:, :3] / scale, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(m0[:, METRIC.power], m1[:, METRIC.power], rtol=1e-12)
+    np.testing.assert_array_equal(m0[:, METRIC.impacts_per_period],
+                                  m1[:, METRIC.impacts_per_period])
+    assert (m1[:, METRIC.impacts_per_period] > 0).any()
+    assert np.isnan(m0[:, list(BOOKED_METRICS)]).all()
+    assert np.isfinite(m1[:, list(BOOKED_METRICS)]).all()

@@ -95,6 +95,20 @@ def test_grazing_of_the_linear_branch_is_the_closed_form(s_curve):
     assert np.all(error[away] < 1e-6), error[away].max()
 
 
+def test_grazing_of_a_lower_stop_is_the_closed_form():
+    """A lower stop alone (the upper one out of reach): the linear orbit grazes it where
+    the closed form's |X(f)| equals lower_gap, as for the upper stop."""
+    p = resolve_parameters("paper", gap=1.0, lower_gap=GAP)
+    closed = brentq(lambda f: abs(phasor(**{**p, "frequency": f})[0]) - GAP, 205.0, 300.0,
+                    xtol=1e-10)
+    ds = continue_branch("paper", "frequency", 300.0, closed - 0.5, gap=1.0, lower_gap=GAP)
+    grazings = located(ds, GRAZING)
+    assert grazings.size == 1
+    assert grazings[0] == pytest.approx(closed, rel=1e-6)
+    at = ds["bifurcation"].values == GRAZING
+    assert ds["x_min"].values[at][0] == pytest.approx(-GAP, rel=1e-5)
+
+
 def test_folds_lie_between_jumps_of_fine_sweeps(s_curve):
     """Up (down) at 0.01 Hz near each fold, the same step: the last point on the upper
     (lower) branch lies before the fold and the first off it after."""
