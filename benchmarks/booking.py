@@ -7,6 +7,9 @@
   Newton iterate's perturbed copies run): microseconds per point and period.
 - The 64 x 64 sweep of benchmarks/cases.py on all threads, storing ``power`` alone and
   storing every metric: M RK4 steps per second.
+- Where the RK4 steps of the 64 x 64 sweeps go (stop in reach and out of reach, with and
+  without an error estimate): Newton iterates, their perturbed copies (which book
+  nothing), and the motion with the estimates.
 
 Best of the rounds; the machine's CPU model heads the tables.
 """
@@ -21,11 +24,11 @@ from types import SimpleNamespace
 import numba
 
 import harvester_sweep as hs
-from benchmarks.cases import GRID, STEPS_PER_PERIOD, sweep_spec
+from benchmarks.cases import FREE, GRID, STEPS_PER_PERIOD, sweep_spec
 from benchmarks.compare import POINTS, _per_period, _points
 from benchmarks.variants import cpu_model
-from harvester_sweep import _engine
-from harvester_sweep._engine import PARAM
+from harvester_sweep import _engine, orbits
+from harvester_sweep._engine import METRIC, PARAM
 from harvester_sweep.packing import initial_state, pack_parameters
 from harvester_sweep.sweep_file import METRIC_OUTPUTS
 
@@ -36,6 +39,39 @@ def _sweep_rate(outputs) -> float:
     start = time.perf_counter()
     ds = hs.run_sweep(spec, None, progress=False)
     return int(ds.rk4_steps.sum()) / (time.perf_counter() - start) / 1e6
+
+
+def _shares(grid, estimate: str) -> dict:
+    """Fractions of a sweep's RK4 steps run by the Newton iterates, their perturbed copies
+    and the rest (motion, estimates), counted round by round of the orbit solver."""
+    counts = dict.fromkeys(("Newton iterates", "perturbed copies", "motion and estimates"), 0.0)
+    solve_round, run = orbits._Points.round, _engine.run_points
+
+    def counted_round(self, threaded):
+        k = int((self.phase == orbits._NEWTON).sum()) * (self.D + 1)
+
+        def counted_run(rows, states, metrics, strobes, **options):
+            run(rows, states, metrics, strobes, **options)
+            steps = metrics[:, METRIC.periods_run] * rows[:, PARAM.steps]
+            counts["Newton iterates"] += steps[:k:self.D + 1].sum()
+            counts["perturbed copies"] += steps[:k].sum() - steps[:k:self.D + 1].sum()
+            counts["motion and estimates"] += steps[k:].sum()
+
+        orbits._engine.run_points = counted_run
+        try:
+            return solve_round(self, threaded)
+        finally:
+            orbits._engine.run_points = run
+
+    orbits._Points.round = counted_round
+    try:
+        spec = sweep_spec(grid)
+        spec["sweep"]["error_estimate"] = estimate
+        hs.run_sweep(spec, None, progress=False)
+    finally:
+        orbits._Points.round = solve_round
+    total = sum(counts.values())
+    return {name: n / total for name, n in counts.items()}
 
 
 def main(argv=None) -> None:
@@ -69,6 +105,13 @@ def main(argv=None) -> None:
           "| M steps/s |\n| --- | ---: |")
     for name in sweeps:
         print(f"| {name} | {best[name]:.3g} |")
+    print("\n| 64 x 64 sweep | Newton iterates | perturbed copies | motion and estimates |"
+          "\n| --- | ---: | ---: | ---: |")
+    for label, grid in (("stop in reach", GRID), ("stop out of reach", FREE)):
+        for estimate in ("none", "all"):
+            shares = _shares(grid, estimate)
+            print(f"| {label}, error_estimate {estimate} | "
+                  + " | ".join(f"{100 * s:.0f} %" for s in shares.values()) + " |")
 
 
 if __name__ == "__main__":

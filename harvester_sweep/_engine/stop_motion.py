@@ -11,9 +11,10 @@ as the tip does, and the contact force the other way::
 The contact's switches are those of the rigid stop with the relative motion in place of
 the tip's: ``x - x_s = g`` (touch, separation) and ``1 + c_h (x' - x_s') = 0`` (the
 no-tension clip). A lane holding a moving stop takes every step here, in scalar code
-(lanes.load marks it so), so that the lane loop of the rigid stop carries none of it:
-the trial step of the lane loop is dropped and the step taken again from its start, in
-quarter steps while in contact, every switch located inside the step as in :mod:`.rk4`.
+(lanes.load marks it so), so that the lane loop of the rigid stop carries none of it.
+Apart from the stop, the tip's step is the lane loop's trial step and the stop's own two
+equations are stepped beside it (:func:`_apart`); in contact the step is taken again from
+its start in quarter steps; every switch is located inside the step as in :mod:`.rk4`.
 """
 
 from __future__ import annotations
