@@ -51,6 +51,10 @@ from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, N_STROBE, PARAM, STATE, 
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
+#: A Newton iterate this near the one its monodromy was taken at (relative to the scales)
+#: reuses that monodromy (a chord step: its centre lane alone): the monodromy changes by
+#: no more than its own forward differences span [-].
+CHORD = PERTURBATION
 #: Newton iterations of one attempt before it is given up [-].
 MAX_NEWTON = 8
 #: A trajectory's state is in the linear regime of a fixed point when the monodromy
@@ -58,10 +62,10 @@ MAX_NEWTON = 8
 LINEAR_REGIME = 0.1
 #: ... and within this distance of it, relative to the orbit's amplitudes: a guard, as one
 #: look at the linear regime is a heuristic and near a fold the basin of another
-#: attractor lies close to the orbit. Not shown necessary: the 24 x 24 grids of
-#: tests/physics/test_orbits.py pass without it; it costs the periods the motion takes to
-#: come this near [-].
-NEAR = 1e-3
+#: attractor lies close to the orbit. It costs the periods the motion takes to come this
+#: near; at 1e-3 it cost a third of the motion of the sweeps' points with contact and took
+#: no other attractor on the benchmark grids (docs/numerics.md) [-].
+NEAR = 0.1
 #: Margin of the no-contact proof, relative to the bound, for the step's own error (RK4
 #: and the Hermite interpolant are far below it at any step the engine takes) [-].
 PROOF_MARGIN = 1e-3
@@ -242,6 +246,9 @@ class _Points:
         self.scale[:] = self._linear_scale()
         self.jacobian = np.full((n, self.D, self.D), np.nan)
         self.first_jacobian = np.full((n, self.D, self.D), np.nan)  # at each attempt's start
+        self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
+        self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
+        self.affine = np.zeros(n, bool)  # ... taken where no lane touched a stop
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
         self.strobes = np.full((n, SAMPLES, self.D), np.nan)
@@ -292,27 +299,31 @@ class _Points:
         self.t0[idx] = self.traj[idx, :self.D]
         self.iteration[idx] = 0
         self.last[idx] = np.inf
+        self.chord[idx] = False
 
     # -- one round ---------------------------------------------------------------------
 
     def round(self, threaded):
         """Run every point's next request in one engine call and act on the results;
         returns the number of points that finished."""
-        newton = np.flatnonzero(self.phase == _NEWTON)
+        iterate = self.phase == _NEWTON
+        newton = np.flatnonzero(iterate & ~self.chord)  # with the copies of the monodromy
+        chord = np.flatnonzero(iterate & self.chord)
         transient = np.flatnonzero(self.phase == _TRANSIENT)
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
-        owners = np.concatenate([np.repeat(newton, self.D + 1), transient, estimate])
+        owners = np.concatenate([np.repeat(newton, self.D + 1), chord, transient, estimate])
         rows = self.rows[owners].copy()
         states = np.concatenate([perturbed_copies(self.y[newton], self.scale[newton]),
-                                 self.traj[transient], self.y[estimate]])
+                                 self.y[chord], self.traj[transient], self.y[estimate]])
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
         k = len(newton) * (self.D + 1)
         copies = np.arange(len(owners)) < k
         copies[:k:self.D + 1] = False
         rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
-        rows[k:k + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
-        rows[k + len(transient):, PARAM.steps] *= 2
+        j = k + len(chord)
+        rows[j:j + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
+        rows[j + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))
         strobes = np.empty((len(owners), SAMPLES, self.D))
         # (the engine's steady-state test ends a piece of the motion that settles; it never
@@ -324,43 +335,68 @@ class _Points:
         before = int((self.phase == _DONE).sum())
         m = metrics[:k].reshape(len(newton), self.D + 1, len(METRIC))
         f = states[:k].reshape(len(newton), self.D + 1, len(STATE))
-        self._after_newton(newton, m, f, strobes[:k:self.D + 1])
-        j = slice(k, k + len(transient))
+        lanes_ok = np.all(_sane(m), axis=1) & np.all(np.isfinite(f[:, :, :self.D]), axis=(1, 2))
+        jac = monodromy(f, self.scale[newton])
+        # (the copies book no extrema: their impacts alone say they stayed clear)
+        r = self.rows[newton, None]
+        self.affine[newton] = ~self._touched(newton, m[:, 0]) & np.all(
+            ((r[..., PARAM.khm] == 0) | (m[:, 1:, METRIC.impacts_per_period] == 0))
+            & ((r[..., PARAM.lower_khm] == 0) | (m[:, 1:, METRIC.impacts_per_period_lower] == 0)),
+            axis=1)
+        c = slice(k, k + len(chord))
+        chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)
+        self._after_newton(np.concatenate([newton, chord]),
+                           np.concatenate([m[:, 0], metrics[c]]),
+                           np.concatenate([f[:, 0], states[c]]),
+                           np.concatenate([strobes[:k:self.D + 1], strobes[c]]),
+                           np.concatenate([jac, self.newton_jacobian[chord]]),
+                           np.concatenate([lanes_ok, chord_ok]))
+        j = slice(k + len(chord), k + len(chord) + len(transient))
         self._after_transient(transient, metrics[j], states[j], strobes[j])
-        j = slice(k + len(transient), None)
+        j = slice(k + len(chord) + len(transient), None)
         self._after_estimate(estimate, metrics[j], states[j])
         return int((self.phase == _DONE).sum()) - before
 
     # -- Newton ------------------------------------------------------------------------
 
-    def _after_newton(self, idx, m, f, strobes):
+    def _touched(self, idx, m):
+        """Whether runs of points ``idx`` (their metric rows ``m``) touched a stop or came
+        to its gap."""
+        r = self.rows[idx]
+        return ((r[:, PARAM.khm] > 0) & (
+            (m[:, METRIC.impacts_per_period] > 0)
+            | ~(m[:, METRIC.x_max] < r[:, PARAM.gap]))) | ((r[:, PARAM.lower_khm] > 0) & (
+                (m[:, METRIC.impacts_per_period_lower] > 0)
+                | ~(m[:, METRIC.x_min] > -r[:, PARAM.lower_gap])))
+
+    def _after_newton(self, idx, m, centre, strobes, jac, lanes_ok):
+        """A Newton iterate's run: metrics ``m``, end state ``centre`` and strobes of its
+        centre lane, the monodromy ``jac`` (of its copies, or reused by a chord step) and
+        whether every lane ran sane and finite."""
         if not idx.size:
             return
         trajectory = (self.iteration[idx] == 0) & (self.refine[idx] == 0)
         # the attempt's first run is the trajectory's next p periods
         first = idx[trajectory]
-        centre = f[:, 0]
         self.t1[first] = centre[trajectory, :self.D]
         self.t1_periods[first] = self.p[first]
         self.traj[first] = centre[trajectory]
         self.run[first] += self.p[first]
         tested = first[self.tested[first]]  # (keep the orbit the test found)
         self.metrics[first] = np.where(self.tested[first, None], self.metrics[first],
-                                       m[trajectory, 0])
+                                       m[trajectory])
         self.strobes[first] = np.where(self.tested[first, None, None], self.strobes[first],
                                        strobes[trajectory])
         self.traj[tested] = self.y[tested]
-        diverged = trajectory & ~_sane(m[:, 0])
+        diverged = trajectory & ~_sane(m)
         if diverged.any():
             self._diverge(idx[diverged])
-        ok = ~diverged & np.all(_sane(m), axis=1)
-        ok &= np.all(np.isfinite(f[:, :, :self.D]), axis=(1, 2))
+        ok = ~diverged & lanes_ok
         y = self.y[idx, :self.D]
-        xs = np.maximum(np.abs(m[:, 0, METRIC.x_max]), np.abs(m[:, 0, METRIC.x_min]))
-        scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, 0, METRIC.v_peak], 1.0),
+        xs = np.maximum(np.abs(m[:, METRIC.x_max]), np.abs(m[:, METRIC.x_min]))
+        scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, METRIC.v_peak], 1.0),
                              idx)
         scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
-        jac = monodromy(f, self.scale[idx])
         residual = centre[:, :self.D] - y
         step = np.zeros_like(residual)
         cond = np.full(len(idx), np.inf)
@@ -378,34 +414,38 @@ class _Points:
         # a first step beyond NEAR of an orbit with contact will not be taken (the step is
         # about the distance from the orbit): integrate on, for about the periods the motion
         # needs to come NEAR (from the monodromy at t), rather than pay the iterations
-        r = self.rows[idx]
-        contact = ((r[:, PARAM.khm] > 0) & (
-            (m[:, 0, METRIC.impacts_per_period] > 0)
-            | ~(m[:, 0, METRIC.x_max] < r[:, PARAM.gap]))) | ((r[:, PARAM.lower_khm] > 0) & (
-                (m[:, 0, METRIC.impacts_per_period_lower] > 0)
-                | ~(m[:, 0, METRIC.x_min] > -r[:, PARAM.lower_gap])))
-        far = trajectory & good & contact & (size > NEAR)
+        touched = self._touched(idx, m)
+        far = trajectory & good & touched & (size > NEAR)
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
             need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * size[far]))
                            / np.log(np.clip(radius, 1e-3, 1 - 1e-9)))
             self.hint[idx[far]] = np.where(radius < 1, need, 0)
-        failed = far | ~converged & ~diverged & (
+        stalled = ~converged & ~diverged & (
             ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
             | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
-        going = ~converged & ~failed & ~diverged
+        # a chord step that stalls is taken again from the same iterate, with copies
+        again = stalled & self.chord[idx] & ~far & (self.iteration[idx] + 1 < MAX_NEWTON)
+        failed = far | stalled & ~again
+        going = ~converged & ~failed & ~diverged & ~again
         self.scale[idx[ok]] = scale[ok]
         self.first_jacobian[first] = jac[trajectory]
-        # on: a new iterate
+        self.newton_jacobian[idx] = jac
+        self.iteration[idx[again]] += 1
+        self.chord[idx[again]] = False
+        # on: a new iterate, by a chord step where the monodromy is known there (the map is
+        # affine where no lane touched a stop; elsewhere the iterate moved less than CHORD)
         g = idx[going]
         self.y[g, :self.D] = y[going] + step[going]
         self.y[g, self.D:] = centre[going, self.D:]
         self.iteration[g] += 1
         self.last[g] = size[going]
+        self.affine[g] &= ~touched[going]
+        self.chord[g] = self.affine[g] | (size[going] <= CHORD)
         # converged: a fixed point; taken or not
         c = idx[converged]
         if c.size:
-            self._converged(c, m[converged, 0], centre[converged], strobes[converged],
+            self._converged(c, m[converged], centre[converged], strobes[converged],
                             jac[converged], scale[converged], floor[converged])
         # failed: integrate on (a re-solve keeps the orbit it had)
         fails = idx[failed]
@@ -426,6 +466,7 @@ class _Points:
             self.p[idx[again]] = shorter[again]
             self.iteration[idx[again]] = 1  # (the trajectory already ran this attempt)
             self.last[idx[again]] = np.inf
+            self.chord[idx[again]] = False
         keep = ~again
         idx, m, centre, strobes, jac, scale, floor, y = (
             a[keep] for a in (idx, m, centre, strobes, jac, scale, floor, y))
@@ -595,6 +636,7 @@ class _Points:
         self.y[r, :self.D] += step[converged][again]  # the orbit at twice the steps: closer
         self.iteration[r] = 0
         self.last[r] = np.inf
+        self.chord[r] = False
         self._finish(c[~again])
 
     # -- the end of a point --------------------------------------------------------------

@@ -2,14 +2,14 @@
 
 The steps come from the model, not from a trial run: each of a sample of points spread over
 the grid takes the step of its parameters (``steps_per_period``, chosen from its time scales
-when unset) for the periodic-orbit solver's runs (:data:`SOLVER_PERIODS`) and for the
-motion it integrates first: one period where the linear response from rest provably stays
-clear of the stop (twice its amplitude below the gap), else the periods the slowest
-transient needs to come within ``orbits.NEAR`` of the orbit (at most ``max_periods``).
-Contact only adds damping, and a point continued from its neighbour starts closer to its
-orbit, so this is rather an upper estimate. The run time
-divides by a typical rate of the lane engine (:data:`SWEEP_STEPS_PER_SECOND`); the progress
-bar's ETA, from the measured rate, takes over once the sweep runs.
+when unset) for the periodic-orbit solver's runs (:data:`FREE_PERIODS` where the linear
+response from rest provably stays clear of the stop, twice its amplitude below the gap;
+else :data:`CONTACT_PERIODS`) and, with contact, for the periods the slowest transient
+needs to come within ``orbits.NEAR`` of the orbit (at most ``max_periods``). Contact only
+adds damping, and a point continued from its neighbour starts closer to its orbit, so this
+is rather an upper estimate. The run time divides by a typical rate of the lane engine
+(:data:`SWEEP_STEPS_PER_SECOND`); the progress bar's ETA, from the measured rate, takes over
+once the sweep runs.
 """
 
 from __future__ import annotations
@@ -30,9 +30,13 @@ from .orbits import NEAR, D
 SWEEP_STEPS_PER_SECOND = 1e8
 #: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
 LONG_RUN_SECONDS = 3600.0
-#: Periods of a point's own step the solver runs besides the motion: Newton, about three
-#: runs of D + 1 lanes, and the error estimate, two runs at twice the steps.
-SOLVER_PERIODS = 3 * (D + 1) + 2 * 2
+#: Periods of a point's own step the solver runs besides the motion, in Newton's iterates
+#: with their copies (D + 1 lanes), chord steps (one lane) and the error estimate (two runs
+#: at twice the steps): an orbit clear of the stop takes the iterate from rest (whose
+#: centre lane is the motion's one period) and a chord step; one with contact the
+#: attempt from rest and about three iterates after its motion.
+FREE_PERIODS = (D + 1) + 1 + 2 * 2
+CONTACT_PERIODS = (D + 1) + 3 * (D + 1) + 2 * 2
 #: Points whose parameters are resolved for the estimate, spread evenly over the grid.
 SAMPLE_POINTS = 64
 
@@ -92,11 +96,11 @@ def point_steps(p: dict) -> float:
     point refused as too stiff."""
     if p["steps_per_period"] > p["max_steps_per_period"]:
         return 0.0
-    motion = 1.0
-    if p["hertz_stiffness"] > 0 and 2 * abs(linear_response(**p)[0]) >= p["gap"]:
-        rate, _ = timescales.slowest_decay(p)
-        motion = math.log(1.0 / NEAR) * p["frequency"] / rate if rate > 0 else math.inf
-    return p["steps_per_period"] * (min(p["max_periods"], motion) + SOLVER_PERIODS)
+    if not (p["hertz_stiffness"] > 0 and 2 * abs(linear_response(**p)[0]) >= p["gap"]):
+        return p["steps_per_period"] * FREE_PERIODS
+    rate, _ = timescales.slowest_decay(p)
+    motion = math.log(1.0 / NEAR) * p["frequency"] / rate if rate > 0 else math.inf
+    return p["steps_per_period"] * (min(p["max_periods"], motion) + CONTACT_PERIODS)
 
 
 def duration(seconds: float) -> str:
