@@ -411,21 +411,26 @@ class _Points:
         size = np.where(good, _norm(step, scale), np.inf)
         floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
         converged = good & (size <= floor)
-        # a first step beyond NEAR of an orbit with contact will not be taken (the step is
-        # about the distance from the orbit): integrate on, for about the periods the motion
-        # needs to come NEAR (from the monodromy at t), rather than pay the iterations
+        # an orbit with contact is not taken from beyond NEAR of it: not when the first
+        # step is beyond NEAR (the step is about the distance from the orbit), nor when the
+        # motion moved more than 2 NEAR in these p periods (d1 < d0 <= NEAR would bound
+        # that move by 2 NEAR). Integrate on, for about the periods the motion needs to
+        # come NEAR (from the monodromy at t), rather than pay the iterations
         touched = self._touched(idx, m)
-        far = trajectory & good & touched & (size > NEAR)
+        distance = np.maximum(size, 0.5 * _norm(centre[:, :self.D] - y, scale))
+        far = trajectory & good & touched & (distance > NEAR)
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
-            need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * size[far]))
+            need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * distance[far]))
                            / np.log(np.clip(radius, 1e-3, 1 - 1e-9)))
             self.hint[idx[far]] = np.where(radius < 1, need, 0)
         stalled = ~converged & ~diverged & (
             ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
             | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
-        # a chord step that stalls is taken again from the same iterate, with copies
-        again = stalled & self.chord[idx] & ~far & (self.iteration[idx] + 1 < MAX_NEWTON)
+        # a chord step that stalls, or that touched a stop with the monodromy of an affine
+        # run, is taken again from the same iterate, with copies
+        again = (stalled | self.affine[idx] & touched) & self.chord[idx] & ~converged & ~far \
+            & ~diverged & (self.iteration[idx] + 1 < MAX_NEWTON)
         failed = far | stalled & ~again
         going = ~converged & ~failed & ~diverged & ~again
         self.scale[idx[ok]] = scale[ok]
