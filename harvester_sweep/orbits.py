@@ -13,6 +13,9 @@ How, and why (docs/numerics.md, "Periodic orbits"):
   scale: the columns of the monodromy are the forward differences. The copies are
   ordinary points of the lane engine (the same RK4, switches located as in the run), so
   the matrix includes the contact switches without any saltation algebra.
+- **Chord steps.** An iterate reuses the last monodromy and runs its centre lane alone
+  where that monodromy is still the map's: no lane of its run touched a stop (the map is
+  affine off the stop), or the iterate moved less than ``CHORD`` from where it was taken.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
   first evaluation is also the trajectory's next p periods. A converged fixed point is
   taken only when it is stable (spectral radius below 1) and the trajectory is on its
@@ -445,7 +448,6 @@ class _Points:
         self.y[g, self.D:] = centre[going, self.D:]
         self.iteration[g] += 1
         self.last[g] = size[going]
-        self.affine[g] &= ~touched[going]
         self.chord[g] = self.affine[g] | (size[going] <= CHORD)
         # converged: a fixed point; taken or not
         c = idx[converged]
