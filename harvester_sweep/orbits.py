@@ -431,9 +431,11 @@ class _Points:
             ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
             | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
         # a chord step that stalls, or that touched a stop with the monodromy of an affine
-        # run, is taken again from the same iterate, with copies
-        again = (stalled | self.affine[idx] & touched) & self.chord[idx] & ~converged & ~far \
-            & ~diverged & (self.iteration[idx] + 1 < MAX_NEWTON)
+        # run (converged or not: that monodromy is not the orbit's), is taken again from
+        # the same iterate, with copies
+        again = (stalled | self.affine[idx] & touched) & self.chord[idx] & ~far & ~diverged \
+            & (self.iteration[idx] + 1 < MAX_NEWTON)
+        converged &= ~again
         failed = far | stalled & ~again
         going = ~converged & ~failed & ~diverged & ~again
         self.scale[idx[ok]] = scale[ok]
