@@ -129,6 +129,26 @@ def test_same_attractors_as_the_transient(direction):
     assert new[:, METRIC.periods_run].sum() < 0.2 * reference[:, METRIC.periods_run].sum()
 
 
+def test_a_slowly_contracting_orbit_is_the_attractor_the_motion_reaches():
+    """Near a period doubling of the paper scene (gap 2.7 um, 144.4 Hz; spectral radius
+    0.996) the motion from rest needs about 10,000 periods to settle to 1e-12. The solver
+    takes an orbit after a small part of them, in the linear regime of the orbit it
+    converged on, and it is the orbit the transient reaches: same period, same power."""
+    p = resolve_parameters("paper", gap=10e-6 * 17 / 63, frequency=100.0 + 200.0 * 14 / 63,
+                           steps_per_period=1024, settle_tolerance=1e-12, max_periods=40_000)
+    packed = packing.pack_points([p])
+    orbits = solve_orbits(packed.rows, packed.states)
+    reference = _transient(packed.rows, packed.states)[0]
+    new = orbits.metrics[0]
+    assert reference[METRIC.status] == STATUS.settled
+    assert reference[METRIC.periods_run] > 5000
+    assert np.abs(orbits.multipliers[0, 0]) > 0.99
+    assert new[METRIC.status] == STATUS.settled
+    assert new[METRIC.orbit_period] == reference[METRIC.orbit_period]
+    assert new[METRIC.power] == pytest.approx(reference[METRIC.power], rel=1e-8)
+    assert new[METRIC.periods_run] < 0.1 * reference[METRIC.periods_run]
+
+
 def test_hysteresis_up_and_down():
     """Swept up and down, some points of the grid settle on different orbits: the stop's
     hysteresis is kept (each point's orbit against the transient from the same state is
