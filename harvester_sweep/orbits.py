@@ -45,6 +45,7 @@ count or the chunking.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -184,6 +185,26 @@ def orbit_scales(rows, x, v_peak, size=D):
     return np.stack(scales + [x, w_x][:size - D], axis=-1)
 
 
+def free_monodromy(rows, steps, periods):
+    """The monodromy (n, 3, 3) of ``periods`` periods at ``steps`` steps per period of packed
+    rows (n, len(PARAM)) where the motion stays clear of the stops: the engine's own
+    contact-free RK4 step (``free_step_map``, a linear map) to the power of the steps."""
+    step = np.empty((len(rows), 3, 3))
+    for i, (r, s) in enumerate(zip(rows, steps)):
+        d = _engine.free_step_map(r[PARAM.period] / s, math.cos(math.pi / s),
+                                  math.sin(math.pi / s), r[PARAM.amplitude], r[PARAM.wn2],
+                                  r[PARAM.cm], r[PARAM.thm], r[PARAM.irc], r[PARAM.thc])
+        step[i] = np.eye(3) + d[:, :3]
+    power = np.asarray(steps * periods, dtype=np.int64)
+    out = np.broadcast_to(np.eye(3), step.shape).copy()
+    while (power > 0).any():  # (by squaring, each point to its own power)
+        odd = (power & 1).astype(bool)
+        out[odd] = out[odd] @ step[odd]
+        step = step @ step
+        power = power >> 1
+    return out
+
+
 def perturbed_copies(states, scale):
     """Each state (n, len(STATE)) and D copies moved by PERTURBATION of ``scale`` (n, D)
     along each of its first D components: (n * (D + 1), len(STATE)), the copies of a
@@ -252,6 +273,10 @@ class _Points:
         self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
         self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
         self.affine = np.zeros(n, bool)  # ... taken where no lane touched a stop
+        # the run Newton starts from touched a stop (from rest: not yet; a guess from the
+        # linear response, 2 |x| >= gap, was right too rarely in the first period to pay)
+        self.touched = np.zeros(n, bool)
+        self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
         self.strobes = np.full((n, SAMPLES, self.D), np.nan)
@@ -302,7 +327,18 @@ class _Points:
         self.t0[idx] = self.traj[idx, :self.D]
         self.iteration[idx] = 0
         self.last[idx] = np.inf
+        self._first_run(idx)
+
+    def _first_run(self, idx):
+        """Newton's first run from points ``idx``' iterates: where the motion was clear of
+        the stops, it is likely to be too, so its centre lane alone, with the contact-free
+        map's monodromy (run again with copies if it touched after all); else with copies."""
         self.chord[idx] = False
+        free = idx[~self.touched[idx]]
+        if self.D == D and free.size:  # (a moving stop's map is not the tip's alone)
+            self.chord[free] = self.affine[free] = True
+            self.newton_jacobian[free] = free_monodromy(self.rows[free], self.steps[free],
+                                                        self.p[free])
 
     # -- one round ---------------------------------------------------------------------
 
@@ -381,6 +417,7 @@ class _Points:
         trajectory = (self.iteration[idx] == 0) & (self.refine[idx] == 0)
         # the attempt's first run is the trajectory's next p periods
         first = idx[trajectory]
+        self.touched[first] = self._touched(first, m[trajectory])
         self.t1[first] = centre[trajectory, :self.D]
         self.t1_periods[first] = self.p[first]
         self.traj[first] = centre[trajectory]
@@ -421,7 +458,12 @@ class _Points:
         # come NEAR (from the monodromy at t), rather than pay the iterations
         touched = self._touched(idx, m)
         distance = np.maximum(size, 0.5 * _norm(centre[:, :self.D] - y, scale))
-        far = trajectory & good & touched & (distance > NEAR)
+        # (a first run that touched a stop with the contact-free map's monodromy is run
+        # again with copies, and judged then)
+        recheck = trajectory & self.chord[idx] & self.affine[idx] & touched & ~diverged
+        opening = trajectory & ~recheck | self.recheck[idx]
+        self.recheck[idx] = recheck
+        far = opening & good & touched & (distance > NEAR)
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
             need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * distance[far]))
@@ -433,13 +475,13 @@ class _Points:
         # a chord step that stalls, or that touched a stop with the monodromy of an affine
         # run (converged or not: that monodromy is not the orbit's), is taken again from
         # the same iterate, with copies
-        again = (stalled | self.affine[idx] & touched) & self.chord[idx] & ~far & ~diverged \
-            & (self.iteration[idx] + 1 < MAX_NEWTON)
+        again = recheck | (stalled | self.affine[idx] & touched) & self.chord[idx] & ~far \
+            & ~diverged & (self.iteration[idx] + 1 < MAX_NEWTON)
         converged &= ~again
         failed = far | stalled & ~again
         going = ~converged & ~failed & ~diverged & ~again
         self.scale[idx[ok]] = scale[ok]
-        self.first_jacobian[first] = jac[trajectory]
+        self.first_jacobian[idx[opening]] = jac[opening]
         self.newton_jacobian[idx] = jac
         self.iteration[idx[again]] += 1
         self.chord[idx[again]] = False
@@ -583,6 +625,7 @@ class _Points:
     def _after_transient(self, idx, m, f, strobes):
         if not idx.size:
             return
+        self.touched[idx] = self._touched(idx, m)
         self.run[idx] += m[:, METRIC.periods_run]
         self.left[idx] -= m[:, METRIC.periods_run]
         self.traj[idx] = f
@@ -645,7 +688,8 @@ class _Points:
         self.y[r, :self.D] += step[converged][again]  # the orbit at twice the steps: closer
         self.iteration[r] = 0
         self.last[r] = np.inf
-        self.chord[r] = False
+        self.touched[r] = self._touched(r, self.metrics[r])
+        self._first_run(r)
         self._finish(c[~again])
 
     # -- the end of a point --------------------------------------------------------------
@@ -667,6 +711,7 @@ class _Points:
             return
         if not diverged:
             self.begin[nxt] = self.finals[follow]
+            self.touched[nxt] = self._touched(follow, self.metrics[follow])
         self.p[nxt] = np.where(self.status[follow] == STATUS.settled, self.p[follow], 1)
         self.start(nxt)
 

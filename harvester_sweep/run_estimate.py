@@ -32,10 +32,10 @@ SWEEP_STEPS_PER_SECOND = 1e8
 LONG_RUN_SECONDS = 3600.0
 #: Periods of a point's own step the solver runs besides the motion, in Newton's iterates
 #: with their copies (D + 1 lanes), chord steps (one lane) and the error estimate (two runs
-#: at twice the steps): an orbit clear of the stop takes the iterate from rest (whose
-#: centre lane is the motion's one period) and a chord step; one with contact the
-#: attempt from rest and about three iterates after its motion.
-FREE_PERIODS = (D + 1) + 1 + 2 * 2
+#: at twice the steps): an orbit clear of the stop takes the motion's one period (a chord
+#: step with the contact-free map's monodromy) and a second chord step; one with contact
+#: the attempt from rest and about three iterates after its motion.
+FREE_PERIODS = 1 + 1 + 2 * 2
 CONTACT_PERIODS = (D + 1) + 3 * (D + 1) + 2 * 2
 #: Points whose parameters are resolved for the estimate, spread evenly over the grid.
 SAMPLE_POINTS = 64
