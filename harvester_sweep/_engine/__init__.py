@@ -34,7 +34,6 @@ from .layouts import (
     STATE,
     STATUS,
 )
-from .model import free_step_map
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
@@ -62,7 +61,6 @@ __all__ = [
     "STATE",
     "STATUS",
     "cache_warm",
-    "free_step_map",
     "record_series",
     "run_points",
     "warm_up",

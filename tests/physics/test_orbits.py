@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from harvester_sweep import _engine, packing, resolve_parameters, run_scene
+from harvester_sweep import _engine, orbits, packing, resolve_parameters, run_scene
 from harvester_sweep._engine import METRIC, PARAM, STATUS
 from harvester_sweep.orbits import solve_orbits
 from tests.helpers import phasor
@@ -51,6 +51,32 @@ def test_linear_orbit_is_the_phasor_and_its_multipliers_are_closed_form(steps):
         for mu in reference:
             assert np.min(np.abs(engine - mu)) <= rtol * np.max(np.abs(reference))
     assert m["spectral_radius"] == pytest.approx(np.max(np.abs(rk4)), rel=1e-11)
+
+
+def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
+    """Clear of the stop the solver takes the monodromy in closed form, RK4's polynomial of
+    the system matrix to the power N p (orbits.free_monodromy); the engine's own lanes,
+    run from copies of a state moved along each component, give the same matrix (the map
+    is affine there: the forward differences are exact to rounding)."""
+    points = [resolve_parameters("paper", gap=1.0, frequency=f, resistance=r,
+                                 steps_per_period=s)
+              for f, r, s in ((140.0, 1e5, 256), (190.0, 1e9, 512), (120.0, 1e3, 320))]
+    packed = packing.pack_points(points)
+    periods = np.array([1, 2, 3])
+    scale = np.array([[1e-6, 1e-3, 1.0]] * len(points))
+    states = orbits.perturbed_copies(packed.states, scale)
+    rows = np.repeat(packed.rows, 4, axis=0)
+    rows[:, PARAM.max_periods] = np.repeat(periods, 4)
+    metrics = np.empty((len(rows), len(METRIC)))
+    strobes = np.empty((len(rows), orbits.SAMPLES, 3))
+    _engine.run_points(rows, states, metrics, strobes, settle=False)
+    lanes = orbits.monodromy(states.reshape(len(points), 4, -1), scale)
+    closed = orbits.free_monodromy(packed.rows, packed.rows[:, PARAM.steps], periods)
+    assert np.all(metrics[:, METRIC.impacts_per_period] == 0)
+    # (relative to each column's scale: the differences' rounding, 1e-16 / 1e-6)
+    error = np.abs(lanes - closed) * scale[:, None, :] / scale[:, :, None]
+    assert np.max(error) < 1e-8
+    assert not np.allclose(closed, np.eye(3))  # (a map that moves)
 
 
 @pytest.mark.parametrize("overrides", [
