@@ -184,34 +184,23 @@ def orbit_scales(rows, x, v_peak, size=D):
     return np.stack(scales + [x, w_x][:size - D], axis=-1)
 
 
-def _system(rows):
-    """The matrices A (n, 3, 3) of packed rows (n, len(PARAM)) clear of the stops, where
-    (x, v, V)' = A (x, v, V) + (0, amplitude sin(w t), 0) (docs/model.md)."""
-    a = np.zeros((len(rows), 3, 3))
+def free_monodromy(rows, steps, periods):
+    """The monodromy (n, 3, 3) of ``periods`` periods at ``steps`` steps per period of packed
+    rows (n, len(PARAM)) where the motion stays clear of the stops. There the system is
+    linear, z' = A z + forcing, and a classical RK4 step of length h maps z's deviations by
+    the polynomial I + hA + (hA)^2/2 + (hA)^3/6 + (hA)^4/24 (the engine's contact-free step
+    is this map); the monodromy is its power, taken by squaring."""
+    n = len(rows)
+    a = np.zeros((n, 3, 3))
     a[:, 0, 1] = 1.0
     a[:, 1, 0], a[:, 1, 1] = -rows[:, PARAM.wn2], -rows[:, PARAM.cm]
     a[:, 1, 2] = rows[:, PARAM.thm]
     a[:, 2, 1], a[:, 2, 2] = -rows[:, PARAM.thc], -rows[:, PARAM.irc]
-    return a
-
-
-def _free_step(rows, steps):
-    """The map (n, 3, 3) of deviations of one classical RK4 step at ``steps`` steps per
-    period clear of the stops: I + hA + (hA)^2/2 + (hA)^3/6 + (hA)^4/24, the system being
-    linear there (the engine's contact-free step is this map)."""
-    ha = _system(rows) * (rows[:, PARAM.period] / steps)[:, None, None]
-    step = term = np.broadcast_to(np.eye(3), ha.shape)
+    ha = a * (rows[:, PARAM.period] / steps)[:, None, None]
+    step = term = np.broadcast_to(np.eye(3), a.shape)
     for k in range(1, 5):
         term = term @ ha / k
         step = step + term
-    return step
-
-
-def free_monodromy(rows, steps, periods):
-    """The monodromy (n, 3, 3) of ``periods`` periods at ``steps`` steps per period of packed
-    rows (n, len(PARAM)) where the motion stays clear of the stops: the RK4 step's map to
-    the power of the steps, taken by squaring."""
-    step = _free_step(rows, steps)
     power = np.asarray(steps * periods, dtype=np.int64)
     out = np.broadcast_to(np.eye(3), step.shape).copy()
     while (power > 0).any():  # (by squaring, each point to its own power)
@@ -220,28 +209,6 @@ def free_monodromy(rows, steps, periods):
         step = step @ step
         power = power >> 1
     return out
-
-
-def first_period_reaches_a_stop(rows, states, samples=64):
-    """Whether the motion from ``states`` (n, >= 3) at phase 0 would reach a stop within
-    one period were it linear: the periodic response Im(Z e^{jwt}), Z = (jw - A)^-1 b,
-    plus the deviation from it carried by the RK4 map, sampled ``samples`` times (a guess
-    of which run touches: between samples the motion peaks a little higher)."""
-    w = 2 * np.pi / rows[:, PARAM.period]
-    force = np.zeros((len(rows), 3), complex)
-    force[:, 1] = rows[:, PARAM.amplitude]
-    with np.errstate(all="ignore"):
-        z = np.linalg.solve(1j * w[:, None, None] * np.eye(3) - _system(rows),
-                            force[..., None])[..., 0]
-        step = _free_step(rows, samples)
-        e = states[:, :3] - z.imag
-        high, low = states[:, 0].copy(), states[:, 0].copy()
-        for k in range(1, samples + 1):
-            e = np.einsum("nij,nj->ni", step, e)
-            x = e[:, 0] + (z[:, 0] * np.exp(2j * np.pi * k / samples)).imag
-            high, low = np.maximum(high, x), np.minimum(low, x)
-    return (rows[:, PARAM.khm] > 0) & ~(high < rows[:, PARAM.gap]) \
-        | (rows[:, PARAM.lower_khm] > 0) & ~(low > -rows[:, PARAM.lower_gap])
 
 
 def perturbed_copies(states, scale):
@@ -312,9 +279,9 @@ class _Points:
         self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
         self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
         self.affine = np.zeros(n, bool)  # ... taken where no lane touched a stop
-        # the run Newton starts from touched a stop (before any run: a guess)
-        self.touched = first_period_reaches_a_stop(rows, states) if self.D == D \
-            else np.zeros(n, bool)
+        # the run Newton starts from touched a stop (from rest: not yet; a guess from the
+        # linear response, 2 |x| >= gap, was right too rarely in the first period to pay)
+        self.touched = np.zeros(n, bool)
         self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
