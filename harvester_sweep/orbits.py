@@ -185,29 +185,12 @@ def orbit_scales(rows, x, v_peak, size=D):
 
 
 def free_monodromy(rows, steps, periods):
-    """The monodromy (n, 3, 3) of ``periods`` periods at ``steps`` steps per period of packed
-    rows (n, len(PARAM)) where the motion stays clear of the stops. There the system is
-    linear, z' = A z + forcing, and a classical RK4 step of length h maps z's deviations by
-    the polynomial I + hA + (hA)^2/2 + (hA)^3/6 + (hA)^4/24 (the engine's contact-free step
-    is this map); the monodromy is its power, taken by squaring."""
-    n = len(rows)
-    a = np.zeros((n, 3, 3))
-    a[:, 0, 1] = 1.0
-    a[:, 1, 0], a[:, 1, 1] = -rows[:, PARAM.wn2], -rows[:, PARAM.cm]
-    a[:, 1, 2] = rows[:, PARAM.thm]
-    a[:, 2, 1], a[:, 2, 2] = -rows[:, PARAM.thc], -rows[:, PARAM.irc]
-    ha = a * (rows[:, PARAM.period] / steps)[:, None, None]
-    step = term = np.broadcast_to(np.eye(3), a.shape)
-    for k in range(1, 5):
-        term = term @ ha / k
-        step = step + term
-    power = np.asarray(steps * periods, dtype=np.int64)
-    out = np.broadcast_to(np.eye(3), step.shape).copy()
-    while (power > 0).any():  # (by squaring, each point to its own power)
-        odd = (power & 1).astype(bool)
-        out[odd] = out[odd] @ step[odd]
-        step = step @ step
-        power = power >> 1
+    """The monodromy (n, 3, 3) of ``periods`` (n,) periods at ``steps`` (n,) steps per
+    period of packed rows (n, len(PARAM)) where the motion stays clear of the stops: the
+    engine's contact-free RK4 step matrix to the power of the steps (_engine.monodromy)."""
+    out = np.empty((len(rows), 3, 3))
+    _engine.free_monodromy(np.ascontiguousarray(rows), np.asarray(steps, dtype=float),
+                           np.asarray(periods, dtype=np.int64), out)
     return out
 
 

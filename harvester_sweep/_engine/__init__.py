@@ -14,12 +14,14 @@ final states. One concept per module:
 - ``steady``: orbit periods from the stroboscopic samples, metrics of the last orbit;
 - ``booking``: what a step finished in scalar code books (touches, extrema, force peaks);
 - ``stop_motion``: a stop on a spring, stepped in scalar code;
+- ``monodromy``: the period map's Jacobian clear of the stops, in closed form;
 - ``lanes``: the lane table, its vector step loop and the scalar finish of marked steps;
 - ``scheduler``: lines, the shared queue, threads and progress (:func:`run_points`);
 - ``cache``: numba's on-disk cache kept in step with this source.
 """
 
-from . import booking, cache, hermite, lanes, model, rk4, scheduler, steady, stop_motion
+from . import (booking, cache, hermite, lanes, model, monodromy, rk4, scheduler, steady,
+               stop_motion)
 from .cache import SOURCE_DIGEST
 from .layouts import (
     BOOKED_METRICS,
@@ -34,11 +36,12 @@ from .layouts import (
     STATE,
     STATUS,
 )
+from .monodromy import free_monodromy
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
-cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, model, rk4, scheduler,
-                                                 steady, stop_motion))
+cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, model, monodromy,
+                                                 rk4, scheduler, steady, stop_motion))
 
 
 def cache_warm() -> bool:
@@ -61,6 +64,7 @@ __all__ = [
     "STATE",
     "STATUS",
     "cache_warm",
+    "free_monodromy",
     "record_series",
     "run_points",
     "warm_up",

@@ -54,10 +54,10 @@ def test_linear_orbit_is_the_phasor_and_its_multipliers_are_closed_form(steps):
 
 
 def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
-    """Clear of the stop the solver takes the monodromy in closed form, RK4's polynomial of
-    the system matrix to the power N p (orbits.free_monodromy); the engine's own lanes,
-    run from copies of a state moved along each component, give the same matrix (the map
-    is affine there: the forward differences are exact to rounding)."""
+    """Clear of the stop the solver takes the monodromy in closed form, the contact-free
+    RK4 step's matrix to the power N p (orbits.free_monodromy); the engine's lanes, run
+    from copies of a state moved along each component, give the same matrix (the map is
+    affine there: the forward differences are exact to rounding)."""
     points = [resolve_parameters("paper", gap=1.0, frequency=f, resistance=r,
                                  steps_per_period=s)
               for f, r, s in ((140.0, 1e5, 256), (190.0, 1e9, 512), (120.0, 1e3, 320))]
