@@ -69,6 +69,9 @@ LINEAR_REGIME = 0.1
 #: near; at 1e-3 it cost a third of the motion of the sweeps' points with contact and took
 #: no other attractor on the benchmark grids (docs/numerics.md) [-].
 NEAR = 0.1
+#: Steps per period of the linear motion that guesses whether a motion no run has taken
+#: yet will touch a stop in its first period (_engine.free_extent) [-].
+GUESS_STEPS = 64
 #: Margin of the no-contact proof, relative to the bound, for the step's own error (RK4
 #: and the Hermite interpolant are far below it at any step the engine takes) [-].
 PROOF_MARGIN = 1e-3
@@ -262,9 +265,14 @@ class _Points:
         self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
         self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
         self.affine = np.zeros(n, bool)  # ... taken where no lane touched a stop
-        # the run Newton starts from touched a stop (from rest: not yet; a guess from the
-        # linear response, 2 |x| >= gap, was right too rarely in the first period to pay)
+        # the run Newton starts from touched a stop (before any run: the linear motion's
+        # first period says whether it will)
         self.touched = np.zeros(n, bool)
+        if self.D == D:
+            extent = np.empty((n, 2))
+            _engine.free_extent(rows, states, GUESS_STEPS, extent)
+            self.touched = (rows[:, PARAM.khm] > 0) & ~(extent[:, 0] < rows[:, PARAM.gap]) \
+                | (rows[:, PARAM.lower_khm] > 0) & ~(extent[:, 1] > -rows[:, PARAM.lower_gap])
         self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps

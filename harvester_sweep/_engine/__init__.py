@@ -14,7 +14,7 @@ final states. One concept per module:
 - ``steady``: orbit periods from the stroboscopic samples, metrics of the last orbit;
 - ``booking``: what a step finished in scalar code books (touches, extrema, force peaks);
 - ``stop_motion``: a stop on a spring, stepped in scalar code;
-- ``monodromy``: the period map's Jacobian clear of the stops, in closed form;
+- ``monodromy``: the period map clear of the stops (its Jacobian, its reach), in closed form;
 - ``lanes``: the lane table, its vector step loop and the scalar finish of marked steps;
 - ``scheduler``: lines, the shared queue, threads and progress (:func:`run_points`);
 - ``cache``: numba's on-disk cache kept in step with this source.
@@ -36,7 +36,7 @@ from .layouts import (
     STATE,
     STATUS,
 )
-from .monodromy import free_monodromy
+from .monodromy import free_extent, free_monodromy
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
@@ -64,6 +64,7 @@ __all__ = [
     "STATE",
     "STATUS",
     "cache_warm",
+    "free_extent",
     "free_monodromy",
     "record_series",
     "run_points",

@@ -1,9 +1,11 @@
-"""The monodromy of a point's period map where its motion stays clear of the stops.
+"""A point's period map where its motion stays clear of the stops, in closed form.
 
 There the model is linear and so is its RK4 step (model.free_step_map): deviations of
 ``(x, v, V)`` are carried by the step's matrix ``I + D`` (D's first three columns), and
-over ``N`` steps by its power, taken here by repeated squaring. The orbit solver uses it
-as the Jacobian of Newton's first run from a motion that stayed clear of the stops.
+over ``N`` steps by its power, taken here by repeated squaring (:func:`free_monodromy`).
+The orbit solver uses it as the Jacobian of Newton's first run where that run is expected
+to stay clear of the stops, and :func:`free_extent` (the linear motion over one period at
+a coarse step) as that expectation for a motion no run has taken yet.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from .flags import JIT
-from .layouts import PARAM
+from .layouts import PARAM, STATE
 from .model import free_step_map
 
 
@@ -47,3 +49,28 @@ def free_monodromy(rows, steps, periods, out):
             step, scratch = scratch, step
             power >>= 1
         out[i] = result
+
+
+@njit(**JIT)
+def free_extent(rows, states, steps, out):
+    """Write into ``out`` (n, 2) the largest and smallest x [m] at the step ends of one
+    period of each row's motion from ``states[i]`` (layouts.STATE, at the row's forcing
+    phase) were it clear of the stops, at ``steps`` steps per period: whether a run from
+    there will touch a stop, guessed for the cost of a few steps a point."""
+    for i in range(rows.shape[0]):
+        r = rows[i]
+        d = free_step_map(r[PARAM.period] / steps, math.cos(math.pi / steps),
+                          math.sin(math.pi / steps), r[PARAM.amplitude], r[PARAM.wn2],
+                          r[PARAM.cm], r[PARAM.thm], r[PARAM.irc], r[PARAM.thc])
+        c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
+        x, v, V = states[i, STATE.x], states[i, STATE.v], states[i, STATE.voltage]
+        s, c = math.sin(r[PARAM.phase]), math.cos(r[PARAM.phase])
+        high = low = x
+        for _ in range(steps):
+            dx = d[0, 0] * x + d[0, 1] * v + d[0, 2] * V + d[0, 3] * s + d[0, 4] * c
+            dv = d[1, 0] * x + d[1, 1] * v + d[1, 2] * V + d[1, 3] * s + d[1, 4] * c
+            de = d[2, 0] * x + d[2, 1] * v + d[2, 2] * V + d[2, 3] * s + d[2, 4] * c
+            x, v, V = x + dx, v + dv, V + de
+            s, c = s * c2 + c * s2, c * c2 - s * s2
+            high, low = max(high, x), min(low, x)
+        out[i, 0], out[i, 1] = high, low

@@ -24,7 +24,7 @@ from numba.extending import intrinsic
 
 from . import lanes
 from .flags import JIT
-from .monodromy import free_monodromy
+from .monodromy import free_extent, free_monodromy
 from .layouts import ACC, GROUP, LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
 from .steady import GAP_HISTORY, MAX_ORBIT_PERIOD
 
@@ -273,10 +273,11 @@ def _run_threads(params, states, metrics, strobes, successors, heads, control, s
 
 
 def warm_up() -> None:
-    """Compile :func:`run_points` and the closed-form monodromy (or load them from numba's
+    """Compile :func:`run_points` and the closed-form period map (or load them from numba's
     on-disk cache) without running."""
     free_monodromy(np.zeros((0, len(PARAM))), np.zeros(0), np.zeros(0, dtype=np.int64),
                    np.zeros((0, 3, 3)))
+    free_extent(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), 64, np.zeros((0, 2)))
     run_points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros((0, len(METRIC))),
                np.zeros((0, 0, N_STROBE)))
 
