@@ -239,7 +239,8 @@ class _Problem:
         # the point's own stops (the continued parameter may be a gap)
         r = self.row(self.lam(point.z), self.steps)
         m = point.metrics
-        upper = m[METRIC.x_max] - r[PARAM.gap] if r[PARAM.stop_ratio] == 0 else math.nan
+        upper = m[METRIC.x_max] - r[PARAM.gap] \
+            if r[PARAM.stop_ratio] == 0 and r[PARAM.gap] < NO_STOP else math.nan
         lower = -r[PARAM.lower_gap] - m[METRIC.x_min] if r[PARAM.lower_gap] < NO_STOP \
             else math.nan
         point.tested = np.array([point.tangent[self.D],

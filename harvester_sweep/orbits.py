@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _engine
-from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, N_STROBE, NO_STOP, PARAM, STATE, STATUS
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
@@ -299,7 +299,8 @@ class _Points:
             x = np.abs(r[:, PARAM.amplitude] / (r[:, PARAM.wn2] - w * w + 1j * w * r[:, PARAM.cm]
                                                 + 1j * w * load))
         x = np.where(np.isfinite(x), x, 0.0)
-        x = np.maximum(x, np.abs(r[:, PARAM.gap]) * 1e-3) + 1e-30
+        gap = np.where(r[:, PARAM.gap] < NO_STOP, np.abs(r[:, PARAM.gap]), 0.0)
+        x = np.maximum(x, gap * 1e-3) + 1e-30
         return self._scales(x, 0.0)
 
     def _scales(self, x, v_peak, index=slice(None)):

@@ -61,11 +61,13 @@ def pack_parameters(p: dict) -> np.ndarray:
 
 
 def _stop_row(stop: dict) -> tuple:
-    """The (upper) stop of parameter set ``stop`` as the engine reads it: gap [m], k_h/m
-    [N/(m^1.5 kg)], contact damping in fixed mode [s/m] and the latched law's factor
-    c_h v_imp (0 in fixed mode) [-]."""
+    """The (upper) stop of parameter set ``stop`` as the engine reads it: gap [m] (NO_STOP
+    when hertz_stiffness is 0), k_h/m [N/(m^1.5 kg)], contact damping in fixed mode [s/m]
+    and the latched law's factor c_h v_imp (0 in fixed mode) [-]."""
     latched = stop["contact_damping"] is None and stop["impact_velocity_mode"] == "latched"
-    return (stop["gap"], stop["hertz_stiffness"] / stop["mass"],
+    # (hertz_stiffness 0 is no stop: placed beyond any motion, so that no touch is counted)
+    return (stop["gap"] if stop["hertz_stiffness"] > 0 else NO_STOP,
+            stop["hertz_stiffness"] / stop["mass"],
             contact_damping_of(stop, stop["impact_velocity"]),
             damping_factor(stop["contact_law"], stop["restitution"]) if latched else 0.0)
 

@@ -39,11 +39,14 @@ def test_up_sweep_stays_on_the_impacting_branch_and_down_sweep_on_the_linear_one
 
 
 def test_without_the_stop_the_response_is_the_closed_form_one():
-    """hertz_stiffness = 0: the linear phasor solution, independent of the kernel."""
+    """hertz_stiffness = 0: the linear phasor solution, independent of the kernel, and no
+    impacts where the motion passes the gap (there is no stop)."""
     ds = run_sweep(spec({"frequency": [120.0, 150.0, 190.0]},
-                        {"hertz_stiffness": 0.0, "max_periods": 5000}), progress=False)
+                        {"hertz_stiffness": 0.0, "max_periods": 5000, "gap": 1e-6},
+                        outputs=["power", "x_max", "impacts_per_period"]), progress=False)
     p = resolve_parameters("paper")
     assert (ds["status"] == 0).all()
+    assert (ds["x_max"] > 1e-6).all() and (ds["impacts_per_period"] == 0).all()
     for f in ds["frequency"].values:
         X, V = phasor(**dict(p, frequency=f))
         point = ds.sel(frequency=f)

@@ -48,12 +48,16 @@ def system_matrix(p):
 
 
 def test_linear_branch_matches_closed_form():
-    """No stop: no fold across the resonance, |X| and exp(A T) at every point."""
-    ds = continue_branch("paper", "frequency", 120.0, 200.0, gap=GAP, hertz_stiffness=0.0)
+    """No stop (hertz_stiffness 0): no fold across the resonance, no grazing where the
+    motion passes the gap, |X| and exp(A T) at every point."""
+    gap = 2e-5
+    ds = continue_branch("paper", "frequency", 120.0, 200.0, gap=gap, hertz_stiffness=0.0)
     f = ds["frequency"].values
     assert f.min() == pytest.approx(120.0) and f.max() == pytest.approx(200.0)
     assert np.all(np.diff(f) > 0), "a linear response has no fold"
+    assert ds["x_max"].values.min() < gap < ds["x_max"].values.max()
     assert not ds["bifurcation"].values.any() and ds["stable"].values.all()
+    assert not ds["impacts_per_period"].values.any()
     p = resolve_parameters("paper", gap=GAP)
     X = np.array([abs(phasor(**{**p, "frequency": fk})[0]) for fk in f])
     # within the step-halving estimate of every point (the automatic step without a stop
