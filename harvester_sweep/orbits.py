@@ -16,6 +16,10 @@ How, and why (docs/numerics.md, "Periodic orbits"):
 - **Chord steps.** An iterate reuses the last monodromy and runs its centre lane alone
   where that monodromy is still the map's: no lane of its run touched a stop (the map is
   affine off the stop), or the iterate moved less than ``CHORD`` from where it was taken.
+  Where the run Newton starts from is expected to stay clear of the stops (the last run
+  did; from rest, the motion without the stops says so: _engine.free_extent), its first
+  iterate is a chord step too, with the contact-free map's monodromy in closed form
+  (:func:`free_monodromy`); if it touched after all, it is run again with copies.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
   first evaluation is also the trajectory's next p periods. A converged fixed point is
   taken only when it is stable (spectral radius below 1) and the trajectory is on its
