@@ -274,7 +274,8 @@ class _Points:
         self.touched = np.zeros(n, bool)
         if self.D == D:
             extent = np.empty((n, 2))
-            _engine.free_extent(rows, states, GUESS_STEPS, extent)
+            _engine.free_extent(np.ascontiguousarray(rows), np.ascontiguousarray(states),
+                                GUESS_STEPS, extent)
             self.touched = (rows[:, PARAM.khm] > 0) & ~(extent[:, 0] < rows[:, PARAM.gap]) \
                 | (rows[:, PARAM.lower_khm] > 0) & ~(extent[:, 1] > -rows[:, PARAM.lower_gap])
         self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies

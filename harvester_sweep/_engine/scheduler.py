@@ -24,8 +24,8 @@ from numba.extending import intrinsic
 
 from . import lanes
 from .flags import JIT
-from .monodromy import free_extent, free_monodromy
 from .layouts import ACC, GROUP, LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
+from .monodromy import free_extent, free_monodromy
 from .steady import GAP_HISTORY, MAX_ORBIT_PERIOD
 
 
