@@ -201,6 +201,14 @@ def free_monodromy(rows, steps, periods):
     return out
 
 
+def reaches_a_stop(rows, high, low):
+    """Whether motions between x = ``low`` and ``high`` [m] (n,) come to a stop of packed
+    rows (n, len(PARAM)): to the gap of an upper stop, or to a lower one (a NaN extent
+    counts as reaching)."""
+    return (rows[:, PARAM.khm] > 0) & ~(high < rows[:, PARAM.gap]) \
+        | (rows[:, PARAM.lower_khm] > 0) & ~(low > -rows[:, PARAM.lower_gap])
+
+
 def perturbed_copies(states, scale):
     """Each state (n, len(STATE)) and D copies moved by PERTURBATION of ``scale`` (n, D)
     along each of its first D components: (n * (D + 1), len(STATE)), the copies of a
@@ -276,8 +284,7 @@ class _Points:
             extent = np.empty((n, 2))
             _engine.free_extent(np.ascontiguousarray(rows), np.ascontiguousarray(states),
                                 GUESS_STEPS, extent)
-            self.touched = (rows[:, PARAM.khm] > 0) & ~(extent[:, 0] < rows[:, PARAM.gap]) \
-                | (rows[:, PARAM.lower_khm] > 0) & ~(extent[:, 1] > -rows[:, PARAM.lower_gap])
+            self.touched = reaches_a_stop(rows, extent[:, 0], extent[:, 1])
         self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
         self.metrics = np.full((n, len(METRIC)), np.nan)
         self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
@@ -405,11 +412,9 @@ class _Points:
         """Whether runs of points ``idx`` (their metric rows ``m``) touched a stop or came
         to its gap."""
         r = self.rows[idx]
-        return ((r[:, PARAM.khm] > 0) & (
-            (m[:, METRIC.impacts_per_period] > 0)
-            | ~(m[:, METRIC.x_max] < r[:, PARAM.gap]))) | ((r[:, PARAM.lower_khm] > 0) & (
-                (m[:, METRIC.impacts_per_period_lower] > 0)
-                | ~(m[:, METRIC.x_min] > -r[:, PARAM.lower_gap])))
+        return reaches_a_stop(r, m[:, METRIC.x_max], m[:, METRIC.x_min]) \
+            | (r[:, PARAM.khm] > 0) & (m[:, METRIC.impacts_per_period] > 0) \
+            | (r[:, PARAM.lower_khm] > 0) & (m[:, METRIC.impacts_per_period_lower] > 0)
 
     def _after_newton(self, idx, m, centre, strobes, jac, lanes_ok):
         """A Newton iterate's run: metrics ``m``, end state ``centre`` and strobes of its

@@ -53,6 +53,17 @@ def test_linear_orbit_is_the_phasor_and_its_multipliers_are_closed_form(steps):
     assert m["spectral_radius"] == pytest.approx(np.max(np.abs(rk4)), rel=1e-11)
 
 
+def _run_periods(rows, states, periods):
+    """The engine's metric rows of ``periods`` periods of each point, no steady-state test
+    (``states`` end where the runs ended)."""
+    rows = rows.copy()
+    rows[:, PARAM.max_periods] = periods
+    metrics = np.empty((len(rows), len(METRIC)))
+    _engine.run_points(rows, states, metrics, np.empty((len(rows), orbits.SAMPLES, 3)),
+                       settle=False)
+    return metrics
+
+
 def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     """Clear of the stop the solver takes the monodromy in closed form, the contact-free
     RK4 step's matrix to the power N p (orbits.free_monodromy); the engine's lanes, run
@@ -65,11 +76,7 @@ def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     periods = np.array([1, 2, 3])
     scale = np.array([[1e-6, 1e-3, 1.0]] * len(points))
     states = orbits.perturbed_copies(packed.states, scale)
-    rows = np.repeat(packed.rows, 4, axis=0)
-    rows[:, PARAM.max_periods] = np.repeat(periods, 4)
-    metrics = np.empty((len(rows), len(METRIC)))
-    strobes = np.empty((len(rows), orbits.SAMPLES, 3))
-    _engine.run_points(rows, states, metrics, strobes, settle=False)
+    metrics = _run_periods(np.repeat(packed.rows, 4, axis=0), states, np.repeat(periods, 4))
     lanes = orbits.monodromy(states.reshape(len(points), 4, -1), scale)
     closed = orbits.free_monodromy(packed.rows, packed.rows[:, PARAM.steps], periods)
     assert np.all(metrics[:, METRIC.impacts_per_period] == 0)
@@ -88,12 +95,8 @@ def test_the_guess_of_a_first_period_in_contact_is_the_engines():
     packed = packing.pack_points(points)
     extent = np.empty((len(points), 2))
     _engine.free_extent(packed.rows, packed.states, orbits.GUESS_STEPS, extent)
-    rows = packed.rows.copy()
-    rows[:, PARAM.max_periods] = 1
-    metrics = np.empty((len(rows), len(METRIC)))
-    strobes = np.empty((len(rows), orbits.SAMPLES, 3))
-    _engine.run_points(rows, packed.states.copy(), metrics, strobes, settle=False)
-    gap = rows[:, PARAM.gap]
+    metrics = _run_periods(packed.rows, packed.states.copy(), 1)
+    gap = packed.rows[:, PARAM.gap]
     touched = (metrics[:, METRIC.impacts_per_period] > 0) | (metrics[:, METRIC.x_max] >= gap)
     grazing = np.abs(metrics[:, METRIC.x_max] - gap) <= 0.01 * gap
     assert 20 < touched.sum() < len(points) - 20
