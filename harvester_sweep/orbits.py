@@ -67,6 +67,11 @@ MAX_NEWTON = 8
 #: A trajectory's state is in the linear regime of a fixed point when the monodromy
 #: predicts the next p periods to this fraction of their distance from it [-].
 LINEAR_REGIME = 0.1
+#: ... and its first run's monodromy does not expand: a spectral radius above this at the
+#: attempt's start says the motion there is not in the linear regime of a stable orbit (a
+#: chaotic motion, or one passing an unstable orbit), and the attempt ends at once rather
+#: than pay the iterations to an orbit it could not take (docs/numerics.md) [-].
+EXPANDING = 1.0
 #: ... and within this distance of it, relative to the orbit's amplitudes: a guard, as one
 #: look at the linear regime is a heuristic and near a fold the basin of another
 #: attractor lies close to the orbit. It costs the periods the motion takes to come this
@@ -463,7 +468,8 @@ class _Points:
         # step is beyond NEAR (the step is about the distance from the orbit), nor when the
         # motion moved more than 2 NEAR in these p periods (d1 < d0 <= NEAR would bound
         # that move by 2 NEAR). Integrate on, for about the periods the motion needs to
-        # come NEAR (from the monodromy at t), rather than pay the iterations
+        # come NEAR (from the monodromy at t), rather than pay the iterations. Nor when the
+        # monodromy at t expands (EXPANDING): t is not in a stable orbit's linear regime
         touched = self._touched(idx, m)
         distance = np.maximum(size, 0.5 * _norm(centre[:, :self.D] - y, scale))
         # (a first run that touched a stop with the contact-free map's monodromy is run
@@ -472,6 +478,9 @@ class _Points:
         opening = trajectory & ~recheck | self.recheck[idx]
         self.recheck[idx] = recheck
         far = opening & good & touched & (distance > NEAR)
+        near = np.flatnonzero(opening & good & touched & ~far & ~converged)
+        if near.size:
+            far[near] = np.max(np.abs(np.linalg.eigvals(jac[near])), axis=1) > EXPANDING
         if far.any():
             radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
             need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * distance[far]))

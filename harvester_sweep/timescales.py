@@ -14,6 +14,7 @@ its contact acts on the reduced mass ``m m_s / (m + m_s)`` of tip and stop.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -65,6 +66,20 @@ class TimeScales:
 
 def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
+    try:
+        return _remembered(tuple(p.items()))
+    except TypeError:  # an unhashable value
+        return _time_scales(p)
+
+
+@functools.lru_cache(maxsize=8192)
+def _remembered(items: tuple) -> TimeScales:
+    """time_scales of the parameter set ``items``, remembered: a point is resolved, then
+    packed, each asking for its step (a chunk of a sweep holds 4096 points)."""
+    return _time_scales(dict(items))
+
+
+def _time_scales(p: dict) -> TimeScales:
     m = p["mass"]
     wn = 2 * math.pi * p["natural_frequency"]
     w = 2 * math.pi * p["frequency"]

@@ -204,6 +204,26 @@ def test_a_slowly_contracting_orbit_is_the_attractor_the_motion_reaches():
     assert new[METRIC.periods_run] < 0.1 * reference[METRIC.periods_run]
 
 
+def test_a_stable_orbit_the_motion_only_passes_is_not_taken():
+    """At gap 0.25 um, 103.8 Hz, 21.5 kOhm, restitution 0.886 (a point of
+    examples/million_points.toml, automatic step) a stable period-2 orbit (spectral radius
+    0.49) lies within NEAR of the motion from rest after 90 periods, but the motion does
+    not settle on it: the transient, run for 5000 periods, never settles. The attempt's
+    monodromy at the motion's state expands (EXPANDING), so the orbit is not taken, and
+    the point is reported not settled, as the transient says."""
+    p = resolve_parameters("paper", gap=0.25e-6, frequency=103.79746835443038,
+                           resistance=21544.346900318822, restitution=0.8857142857142857,
+                           max_periods=1000)
+    packed = packing.pack_points([p])
+    rows = packed.rows.copy()
+    rows[:, PARAM.max_periods] = 5000
+    reference = _transient(rows, packed.states)[0]
+    orbits = solve_orbits(packed.rows, packed.states)
+    assert reference[METRIC.status] == STATUS.not_settled
+    assert orbits.metrics[0, METRIC.status] == STATUS.not_settled
+    assert np.isnan(orbits.multipliers[0]).all()
+
+
 def test_hysteresis_up_and_down():
     """Swept up and down, some points of the grid settle on different orbits: the stop's
     hysteresis is kept (each point's orbit against the transient from the same state is
