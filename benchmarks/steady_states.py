@@ -171,6 +171,7 @@ def main() -> None:
               + ", ".join(f"{tag} {math.ceil(totals[tag] * n_chunks / args.chunks / 60)} min"
                           for tag in totals), ""]
     lines += _bounds(runs, args.rounds, million)
+    lines += _by_kind(runs, args.rounds)
     text = "\n".join(lines)
     print(text)
     RESULT.write_text(text)
@@ -234,6 +235,58 @@ def _bounds(runs: dict, rounds: int, million: Path) -> list:
               f"needed more than 300 periods of motion and "
               f"{int((settled & (motion > 500)).sum())} more than 500.", ""]
     return lines
+
+
+def _by_kind(runs: dict, rounds: int) -> list:
+    """The issue grid's points by what they do (after: settled off the stop, settled with
+    contact, not settled), each kind solved alone by each checkout, engine calls only (no
+    resolving, packing or datasets): where the time before went, and what is left."""
+    grid = GRIDS["64 x 64 gap x frequency sweep of issue 19 (0-10 um, 100-300 Hz)"]
+    solved = {}
+    for tag, hs in runs.items():
+        spec = __import__(hs.__name__ + ".sweep_file", fromlist=["x"]).load_sweep(
+            sweep_spec(grid))
+        packing = __import__(hs.__name__ + ".packing", fromlist=["x"])
+        solved[tag] = (hs, packing.pack_points(
+            [spec.point_parameters(spec.values_at(i)) for i in range(spec.n_lines)]))
+    hs, packed = solved["after"]
+    engine = __import__(hs.__name__ + "._engine", fromlist=["x"])
+    after = __import__(hs.__name__ + ".results", fromlist=["x"]).solve(packed)
+    status = after.metrics[:, engine.METRIC.status]
+    impacts = after.metrics[:, engine.METRIC.impacts_per_period]
+    kinds = {"all": np.ones(len(status), bool),
+             "settled off the stop": (status == 0) & (impacts == 0),
+             "settled with contact": (status == 0) & (impacts > 0),
+             "not settled": status != 0}
+
+    def work(tag, hs, mask):  # time, RK4 steps
+        packed = solved[tag][1]
+        engine = __import__(hs.__name__ + "._engine", fromlist=["x"])
+        rows, states = packed.rows[mask], packed.states[mask].copy()
+        start = time.perf_counter()
+        if tag == "before":  # the transient engine, as its sweeps ran a point
+            metrics = np.empty((len(rows), len(engine.METRIC)))
+            engine.run_points(rows, states, metrics, np.empty((len(rows), 0, 3)))
+            steps = float((metrics[:, engine.METRIC.periods_run] * rows[:, engine.PARAM.steps]
+                           ).sum())
+        else:
+            orbits = __import__(hs.__name__ + ".orbits", fromlist=["x"])
+            steps = float(orbits.solve_orbits(rows, states).rk4_steps.sum())
+        return time.perf_counter() - start, steps
+
+    lines = ["## The issue grid's points by kind, each kind solved alone", "",
+             "The points of the issue's 64 x 64 grid by what they do after, each kind solved "
+             "alone by each checkout (engine and solver only: no resolving, packing or "
+             f"datasets; best of {rounds}, alternated). The kinds do not add up to all: "
+             "solved alone, a kind fills the engine's lanes less well.", "",
+             "| points | n | before: time, RK4 steps | after: time, RK4 steps | before / after |",
+             "| --- | ---: | ---: | ---: | ---: |"]
+    for name, mask in kinds.items():
+        res = _best(runs, rounds, lambda tag, hs: work(tag, hs, mask))
+        (t0, (_, s0)), (t1, (_, s1)) = res["before"], res["after"]
+        lines.append(f"| {name} | {int(mask.sum())} | {t0:.3f} s, {s0:.3g} | {t1:.3f} s, "
+                     f"{s1:.3g} | {t0 / t1:.1f} x |")
+    return lines + [""]
 
 
 if __name__ == "__main__":
