@@ -31,7 +31,8 @@ How, and why (docs/numerics.md, "Periodic orbits"):
     ``x(t) <= x*_max + sqrt(2 E(t - y*) / k)`` for all later times (and
     ``x(t) >= x*_min - sqrt(2 E / k)`` against a lower stop);
   * an orbit with contact is taken when ``t`` is in its linear regime: ``P^p(t)`` is
-    closer to ``y*`` than ``t`` is, and the monodromy predicts it (to ``LINEAR_REGIME``).
+    closer to ``y*`` than ``t`` is, and the monodromy predicts it (to ``LINEAR_REGIME``);
+    an attempt whose first monodromy, at ``t``, expands ends at once (``EXPANDING``).
   Otherwise the trajectory is integrated on (a chunk as long as all it has run so far,
   at least ``FIRST_CHUNK`` periods) and Newton tried again from where it got to; a point
   that never settles (chaos, a budget too short) is still reported as not settled.
