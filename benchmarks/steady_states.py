@@ -177,6 +177,26 @@ def main() -> None:
     RESULT.write_text(text)
 
 
+def _alone(tag: str, hs, points: list, estimate: bool) -> tuple:
+    """``points`` (parameter dicts) solved alone by checkout ``hs``, as its sweeps run a
+    point (before: the transient engine; after: the periodic-orbit solver, with an error
+    estimate on every point if ``estimate``): wall time [s] (packing not included) and
+    RK4 steps."""
+    engine = __import__(hs.__name__ + "._engine", fromlist=["x"])
+    packed = __import__(hs.__name__ + ".packing", fromlist=["x"]).pack_points(points)
+    n = len(points)
+    start = time.perf_counter()
+    if tag == "before":
+        metrics = np.empty((n, len(engine.METRIC)))
+        engine.run_points(packed.rows, packed.states.copy(), metrics, np.empty((n, 0, 3)))
+        elapsed = time.perf_counter() - start
+        return elapsed, float((metrics[:, engine.METRIC.periods_run]
+                               * packed.rows[:, engine.PARAM.steps]).sum())
+    results = __import__(hs.__name__ + ".results", fromlist=["x"])
+    solved = results.solve(packed, estimated=np.full(n, estimate))
+    return time.perf_counter() - start, float(solved.rk4_steps.sum())
+
+
 def _bounds(runs: dict, rounds: int, million: Path) -> list:
     """What bounds the gains: the engine's rate with and without contact in uniform runs
     (this checkout), and the points of the 1e6 sweep's chunk 0 that never settle, solved
@@ -214,20 +234,7 @@ def _bounds(runs: dict, rounds: int, million: Path) -> list:
     motion = solved.metrics[:, engine.METRIC.periods_run]
     settled = status == engine.STATUS.settled
     stuck = [p for p, s in zip(points, status) if s == engine.STATUS.not_settled]
-    times = {}
-    for tag, other in runs.items():
-        eng = __import__(other.__name__ + "._engine", fromlist=["x"])
-        pack = __import__(other.__name__ + ".packing", fromlist=["x"])
-        res = __import__(other.__name__ + ".results", fromlist=["x"])
-        packed = pack.pack_points(stuck)
-        start = time.perf_counter()
-        if tag == "before":  # the transient engine, as its sweeps ran a point
-            eng.run_points(packed.rows, packed.states.copy(),
-                           np.empty((len(stuck), len(eng.METRIC))),
-                           np.empty((len(stuck), 0, 3)))
-        else:
-            res.solve(packed, estimated=np.ones(len(stuck), bool))
-        times[tag] = time.perf_counter() - start
+    times = {tag: _alone(tag, other, stuck, True)[0] for tag, other in runs.items()}
     lines += [f"Chunk 0 of examples/million_points.toml ({len(points)} points): "
               f"{len(stuck)} do not settle within their budget; solved alone they take "
               f"{times['before']:.1f} s before and {times['after']:.1f} s after. Of its "
@@ -239,41 +246,21 @@ def _bounds(runs: dict, rounds: int, million: Path) -> list:
 
 def _by_kind(runs: dict, rounds: int) -> list:
     """The issue grid's points by what they do (after: settled off the stop, settled with
-    contact, not settled), each kind solved alone by each checkout, engine calls only (no
-    resolving, packing or datasets): where the time before went, and what is left."""
+    contact, not settled), each kind solved alone by each checkout (_alone: no resolving
+    or datasets): where the time before went, and what is left."""
+    hs = runs["after"]
     grid = GRIDS["64 x 64 gap x frequency sweep of issue 19 (0-10 um, 100-300 Hz)"]
-    solved = {}
-    for tag, hs in runs.items():
-        spec = __import__(hs.__name__ + ".sweep_file", fromlist=["x"]).load_sweep(
-            sweep_spec(grid))
-        packing = __import__(hs.__name__ + ".packing", fromlist=["x"])
-        solved[tag] = (hs, packing.pack_points(
-            [spec.point_parameters(spec.values_at(i)) for i in range(spec.n_lines)]))
-    hs, packed = solved["after"]
+    spec = __import__(hs.__name__ + ".sweep_file", fromlist=["x"]).load_sweep(sweep_spec(grid))
+    points = [spec.point_parameters(spec.values_at(i)) for i in range(spec.n_lines)]
     engine = __import__(hs.__name__ + "._engine", fromlist=["x"])
-    after = __import__(hs.__name__ + ".results", fromlist=["x"]).solve(packed)
+    after = __import__(hs.__name__ + ".results", fromlist=["x"]).solve(
+        __import__(hs.__name__ + ".packing", fromlist=["x"]).pack_points(points))
     status = after.metrics[:, engine.METRIC.status]
     impacts = after.metrics[:, engine.METRIC.impacts_per_period]
     kinds = {"all": np.ones(len(status), bool),
              "settled off the stop": (status == 0) & (impacts == 0),
              "settled with contact": (status == 0) & (impacts > 0),
              "not settled": status != 0}
-
-    def work(tag, hs, mask):  # time, RK4 steps
-        packed = solved[tag][1]
-        engine = __import__(hs.__name__ + "._engine", fromlist=["x"])
-        rows, states = packed.rows[mask], packed.states[mask].copy()
-        start = time.perf_counter()
-        if tag == "before":  # the transient engine, as its sweeps ran a point
-            metrics = np.empty((len(rows), len(engine.METRIC)))
-            engine.run_points(rows, states, metrics, np.empty((len(rows), 0, 3)))
-            steps = float((metrics[:, engine.METRIC.periods_run] * rows[:, engine.PARAM.steps]
-                           ).sum())
-        else:
-            orbits = __import__(hs.__name__ + ".orbits", fromlist=["x"])
-            steps = float(orbits.solve_orbits(rows, states).rk4_steps.sum())
-        return time.perf_counter() - start, steps
-
     lines = ["## The issue grid's points by kind, each kind solved alone", "",
              "The points of the issue's 64 x 64 grid by what they do after, each kind solved "
              "alone by each checkout (engine and solver only: no resolving, packing or "
@@ -282,7 +269,8 @@ def _by_kind(runs: dict, rounds: int) -> list:
              "| points | n | before: time, RK4 steps | after: time, RK4 steps | before / after |",
              "| --- | ---: | ---: | ---: | ---: |"]
     for name, mask in kinds.items():
-        res = _best(runs, rounds, lambda tag, hs: work(tag, hs, mask))
+        chosen = [p for p, m in zip(points, mask) if m]
+        res = _best(runs, rounds, lambda tag, hs: _alone(tag, hs, chosen, False))
         (t0, (_, s0)), (t1, (_, s1)) = res["before"], res["after"]
         lines.append(f"| {name} | {int(mask.sum())} | {t0:.3f} s, {s0:.3g} | {t1:.3f} s, "
                      f"{s1:.3g} | {t0 / t1:.1f} x |")

@@ -70,8 +70,9 @@ MAX_NEWTON = 8
 LINEAR_REGIME = 0.1
 #: ... and its first run's monodromy does not expand: a spectral radius above this at the
 #: attempt's start says the motion there is not in the linear regime of a stable orbit (a
-#: chaotic motion, or one passing an unstable orbit), and the attempt ends at once rather
-#: than pay the iterations to an orbit it could not take (docs/numerics.md) [-].
+#: chaotic motion, or one passing near an orbit it does not reach), and the attempt ends
+#: at once rather than pay the iterations to an orbit it could not take
+#: (docs/numerics.md) [-].
 EXPANDING = 1.0
 #: ... and within this distance of it, relative to the orbit's amplitudes: a guard, as one
 #: look at the linear regime is a heuristic and near a fold the basin of another
@@ -478,12 +479,14 @@ class _Points:
         recheck = trajectory & self.chord[idx] & self.affine[idx] & touched & ~diverged
         opening = trajectory & ~recheck | self.recheck[idx]
         self.recheck[idx] = recheck
-        far = opening & good & touched & (distance > NEAR)
-        near = np.flatnonzero(opening & good & touched & ~far & ~converged)
-        if near.size:
-            far[near] = np.max(np.abs(np.linalg.eigvals(jac[near])), axis=1) > EXPANDING
+        # (a converged first run is judged by _converged, stable or not)
+        looked = opening & good & touched & ((distance > NEAR) | ~converged)
+        radius = np.zeros(len(idx))
+        if looked.any():
+            radius[looked] = np.max(np.abs(np.linalg.eigvals(jac[looked])), axis=1)
+        far = looked & ((distance > NEAR) | (radius > EXPANDING))
         if far.any():
-            radius = np.max(np.abs(np.linalg.eigvals(jac[far])), axis=1)
+            radius = radius[far]
             need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * distance[far]))
                            / np.log(np.clip(radius, 1e-3, 1 - 1e-9)))
             self.hint[idx[far]] = np.where(radius < 1, need, 0)
