@@ -30,8 +30,9 @@ How, and why (docs/numerics.md, "Periodic orbits"):
     ``E = (k x^2 + m v^2 + C_p V^2) / 2`` (``dE/dt = -c v^2 - V^2/R``), so
     ``x(t) <= x*_max + sqrt(2 E(t - y*) / k)`` for all later times (and
     ``x(t) >= x*_min - sqrt(2 E / k)`` against a lower stop);
-  * an orbit with contact is taken when ``t`` is in its linear regime: ``P^p(t)`` is
-    closer to ``y*`` than ``t`` is, and the monodromy predicts it (to ``LINEAR_REGIME``);
+  * an orbit with contact is taken when ``t`` is in its linear regime: within ``NEAR``
+    of it, the monodromy predicts ``P^p(t)`` (to ``LINEAR_REGIME``), and its prediction
+    from there stays within ``NEAR`` (:func:`on_its_way`);
     an attempt whose first monodromy, at ``t``, expands ends at once (``EXPANDING``).
   Otherwise the trajectory is integrated on (a chunk as long as all it has run so far,
   at least ``FIRST_CHUNK`` periods) and Newton tried again from where it got to; a point
@@ -80,6 +81,8 @@ EXPANDING = 1.0
 #: near; at 1e-3 it cost a third of the motion of the sweeps' points with contact and took
 #: no other attractor on the benchmark grids (docs/numerics.md) [-].
 NEAR = 0.1
+#: Maps of p periods the monodromy's prediction is followed to see that it stays NEAR [-].
+AHEAD = 16
 #: Steps per period of the linear motion that guesses whether a motion no run has taken
 #: yet will touch a stop in its first period (_engine.free_extent) [-].
 GUESS_STEPS = 64
@@ -214,6 +217,32 @@ def reaches_a_stop(rows, high, low):
     counts as reaching)."""
     return (rows[:, PARAM.khm] > 0) & ~(high < rows[:, PARAM.gap]) \
         | (rows[:, PARAM.lower_khm] > 0) & ~(low > -rows[:, PARAM.lower_gap])
+
+
+def on_its_way(t0, t1, q, y, jac, scale, floor):
+    """Whether motions at ``t0`` (n, D), ``q`` (n,) maps of the period map later at ``t1``,
+    are on their way to its fixed points ``y`` (n, D) of monodromy ``jac`` (n, D, D), in
+    components relative to ``scale`` (n, D), with Newton's floor ``floor`` (n,) [-].
+
+    Yes where ``t0`` is on the fixed point (within the floor), or where it is within NEAR
+    of it, the monodromy predicts ``t1 - y`` from ``t0 - y`` to LINEAR_REGIME of its size,
+    and the prediction from ``t1`` for AHEAD more maps stays within NEAR, where the linear
+    regime was seen to hold. (A motion may first move away from a stable orbit, as one of
+    a non-normal monodromy does: on its way too, if it stays near.)
+    """
+    d0 = _norm(t0 - y, scale)
+    d1 = _norm(t1 - y, scale)
+    predicted = t0 - y
+    for k in range(int(q.max(initial=0))):
+        predicted = np.where((k < q)[:, None], np.einsum("nij,nj->ni", jac, predicted),
+                             predicted)
+    linear = _norm(t1 - y - predicted, scale) <= LINEAR_REGIME * d1 + floor
+    stays = d1 <= NEAR
+    ahead = t1 - y
+    for _ in range(AHEAD):
+        ahead = np.einsum("nij,nj->ni", jac, ahead)
+        stays &= _norm(ahead, scale) <= NEAR
+    return (d0 <= floor) | (d0 <= NEAR) & linear & stays
 
 
 def perturbed_copies(states, scale):
@@ -468,7 +497,7 @@ class _Points:
         converged = good & (size <= floor)
         # an orbit with contact is not taken from beyond NEAR of it: not when the first
         # step is beyond NEAR (the step is about the distance from the orbit), nor when the
-        # motion moved more than 2 NEAR in these p periods (d1 < d0 <= NEAR would bound
+        # motion moved more than 2 NEAR in these p periods (d0, d1 <= NEAR would bound
         # that move by 2 NEAR). Integrate on, for about the periods the motion needs to
         # come NEAR (from the monodromy at t), rather than pay the iterations. Nor when the
         # monodromy at t expands (EXPANDING): t is not in a stable orbit's linear regime
@@ -569,17 +598,8 @@ class _Points:
         linear = (r[:, PARAM.khm] == 0) & (r[:, PARAM.lower_khm] == 0)  # (no stop at all)
         free |= linear
         proved |= linear
-        d0 = _norm(e, scale)
-        d1 = _norm(self.t1[idx] - y, scale)
-        # (the trajectory ran t1_periods from t0: q = t1_periods / p maps of p periods)
-        q = np.maximum(self.t1_periods[idx] // p, 1)
-        predicted = e
-        for k in range(int(q.max())):
-            predicted = np.where((k < q)[:, None], np.einsum("nij,nj->ni", jac, predicted),
-                                 predicted)
-        linear = _norm(self.t1[idx] - y - predicted, scale)
-        on_way = (d0 <= floor) | ((d0 <= NEAR) & (d1 < d0)
-                                  & (linear <= LINEAR_REGIME * d1 + floor))
+        q = np.maximum(self.t1_periods[idx] // p, 1)  # (maps of p periods from t0 to t1)
+        on_way = on_its_way(self.t0[idx], self.t1[idx], q, y, jac, scale, floor)
         taken = refining | stable & np.where(free, proved, on_way)
         t = idx[taken]
         self.metrics[t] = m[taken]
@@ -596,6 +616,7 @@ class _Points:
         self._estimate(est)
         self._finish(t[~self.estimated[t]])
         # not taken: integrate on for about the periods the motion needs to come NEAR
+        d0 = _norm(e, scale)
         with np.errstate(divide="ignore"):  # (d0 = 0: no hint, below)
             hint = np.ceil(p[~taken] * np.log(NEAR / (2 * d0[~taken]))
                            / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
@@ -800,5 +821,5 @@ def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
     ])
 
 
-__all__ = ["Orbits", "halving_error", "monodromy", "orbit_scales", "perturbed_copies",
-           "solve_orbits", "sorted_multipliers"]
+__all__ = ["Orbits", "halving_error", "monodromy", "on_its_way", "orbit_scales",
+           "perturbed_copies", "solve_orbits", "sorted_multipliers"]

@@ -224,6 +224,28 @@ def test_a_stable_orbit_the_motion_only_passes_is_not_taken():
     assert np.isnan(orbits.multipliers[0]).all()
 
 
+def test_on_its_way_follows_the_monodromys_prediction():
+    """On an exactly linear period map y -> y* + M (y - y*) with M non-normal (spectral
+    radius 0.9, but |M^k e| grows about 4-fold before it decays): a motion that moves away
+    at first and whose prediction stays within NEAR is on its way; one whose prediction
+    leaves NEAR, one that does not follow the prediction, and one beyond NEAR are not."""
+    m = np.array([[0.9, 1.0, 0.0], [0.0, 0.9, 0.0], [0.0, 0.0, 0.3]])
+    fixed, scale = np.array([1.0, -2.0, 0.5]), np.ones(3)
+
+    def judge(e0, maps=1, moved=np.zeros(3)):
+        e1 = np.linalg.matrix_power(m, maps) @ e0 + moved
+        return bool(orbits.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([maps]),
+                                      fixed[None], m[None], scale[None], np.array([1e-12]))[0])
+
+    small = np.array([0.01, 0.02, 0.0])  # |M^k e| peaks near 0.081 (k = 9)
+    assert np.linalg.norm(m @ small, np.inf) > 1.4 * np.linalg.norm(small, np.inf)
+    assert judge(small) and judge(small, maps=2)
+    assert not judge(2 * small)  # its prediction peaks near 0.16, beyond NEAR
+    assert not judge(small, moved=np.array([0.0, 0.0, 0.005]))  # not the linear regime
+    assert not judge(np.array([0.0, 0.0, 2 * orbits.NEAR]))  # contracting, but beyond NEAR
+    assert judge(np.array([0.0, 1e-13, 0.0]), moved=np.array([0.5, 0.0, 0.0]))  # on it
+
+
 def test_hysteresis_up_and_down():
     """Swept up and down, some points of the grid settle on different orbits: the stop's
     hysteresis is kept (each point's orbit against the transient from the same state is
