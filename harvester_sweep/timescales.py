@@ -64,18 +64,24 @@ class TimeScales:
                       f"penetration {self.penetration:.2g} m)")
 
 
+#: Parameters chosen from the time scales, which they do not depend on: left out of the
+#: key under which the time scales are remembered.
+CHOSEN = frozenset({"steps_per_period", "max_periods"})
+
+
 def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
     try:
-        return _remembered(tuple(p.items()))
+        return _remembered(tuple(item for item in p.items() if item[0] not in CHOSEN))
     except TypeError:  # an unhashable value
         return _time_scales(p)
 
 
 @functools.lru_cache(maxsize=8192)
 def _remembered(items: tuple) -> TimeScales:
-    """time_scales of the parameter set ``items``, remembered: a point is resolved, then
-    packed, each asking for its step (a chunk of a sweep holds 4096 points)."""
+    """time_scales of the parameter set ``items``, remembered: a point is resolved (its
+    step chosen), then packed (its step checked against that choice), each asking for
+    them (a chunk of a sweep holds 4096 points)."""
     return _time_scales(dict(items))
 
 
