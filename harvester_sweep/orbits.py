@@ -179,7 +179,7 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     pts.start(np.flatnonzero(pts.heads()))
     while not (pts.phase == _DONE).all():
         assert ((pts.phase != _WAITING) & (pts.phase != _DONE)).any(), "no point to run"
-        done = pts.round(on_points is not None)
+        done = pts.round()
         if on_points is not None and done:
             on_points(done)
     return pts.result(samples)
@@ -388,7 +388,7 @@ class _Points:
 
     # -- one round ---------------------------------------------------------------------
 
-    def round(self, threaded):
+    def round(self):
         """Run every point's next request in one engine call and act on the results;
         returns the number of points that finished."""
         iterate = self.phase == _NEWTON
@@ -414,8 +414,9 @@ class _Points:
         # (the engine's steady-state test ends a piece of the motion that settles; it never
         # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer
         # than the SAMPLES periods the test waits for)
-        _engine.run_points(rows, states, metrics, strobes, settle=True,
-                           on_points=(lambda _: None) if threaded else None)
+        # (in this thread: a round is short, so that an interrupt is seen between rounds,
+        # and a kernel run in a thread of its own costs a new thread team each round)
+        _engine.run_points(rows, states, metrics, strobes, settle=True)
         np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
         before = int((self.phase == _DONE).sum())
         m = metrics[:k].reshape(len(newton), self.D + 1, len(METRIC))
