@@ -224,6 +224,46 @@ def test_a_stable_orbit_the_motion_only_passes_is_not_taken():
     assert np.isnan(orbits.multipliers[0]).all()
 
 
+def test_an_orbit_the_motion_does_not_approach_at_its_rate_is_not_taken():
+    """At gap 3.53 um, 139.9 Hz, 464 kOhm, restitution 0.53 (a point of
+    examples/million_points.toml, automatic step) a stable period-12 orbit (largest
+    multiplier -0.996) lies within 6e-5 of the motion after 856 periods, and predicts its
+    next period to 9 % of the distance; but along the slowest mode the motion moves 40
+    times faster than the orbit's monodromy says, and it never settles on it: the
+    transient, run for 5000 periods, does not settle. The point is reported not settled
+    (RATE), as the transient says."""
+    p = resolve_parameters("paper", gap=3.53125e-06, frequency=139.873417721519,
+                           resistance=464158.8833612772, restitution=0.5275510204081633,
+                           max_periods=1000)
+    packed = packing.pack_points([p])
+    rows = packed.rows.copy()
+    rows[:, PARAM.max_periods] = 5000
+    reference = _transient(rows, packed.states)[0]
+    orbits = solve_orbits(packed.rows, packed.states)
+    assert reference[METRIC.status] == STATUS.not_settled
+    assert orbits.metrics[0, METRIC.status] == STATUS.not_settled
+    assert np.isnan(orbits.multipliers[0]).all()
+
+
+def test_on_its_way_asks_the_slow_modes_rate():
+    """On a period map y -> y* + M (y - y*) + r whose slowest multiplier is -0.99 and whose
+    monodromy is non-normal (the slow coordinate is x - 4.2 y): a remainder r along y of
+    6 % of the distance, within LINEAR_REGIME, speeds the slow coordinate's shrinking
+    26-fold (beyond RATE) or makes it grow, and the motion is not on its way; one of 2 %
+    speeds it 9-fold and one of 0.2 % 1.8-fold (within RATE: on its way), and one of 0.6 %
+    the other way makes it grow (not)."""
+    m = np.array([[-0.99, 5.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.1]])
+    fixed, scale, e0 = np.array([1.0, -2.0, 0.5]), np.ones(3), np.array([0.05, 0.0, 0.0])
+
+    def judge(remainder):
+        e1 = m @ e0 + np.array([0.0, remainder, 0.0])
+        return bool(orbits.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([1]),
+                                      fixed[None], m[None], scale[None], np.array([1e-12]))[0])
+
+    assert judge(0.0) and judge(-1e-4) and judge(-1e-3)
+    assert not judge(-3e-3) and not judge(3e-3) and not judge(3e-4)
+
+
 def test_on_its_way_follows_the_monodromys_prediction():
     """On an exactly linear period map y -> y* + M (y - y*) with M non-normal (spectral
     radius 0.9, but |M^k e| grows about 4-fold before it decays): a motion that moves away
