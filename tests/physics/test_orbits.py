@@ -242,6 +242,14 @@ def test_an_orbit_the_motion_does_not_approach_at_its_rate_is_not_taken():
                                   restitution=0.5275510204081633)
 
 
+def _on_its_way(m, e0, e1, maps=1):
+    """orbits.on_its_way for one motion at ``e0`` and, ``maps`` maps later, ``e1`` from a
+    fixed point of monodromy ``m`` (unit scales, Newton's floor 1e-12)."""
+    fixed = np.array([1.0, -2.0, 0.5])
+    return bool(orbits.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([maps]),
+                                  fixed[None], m[None], np.ones((1, 3)), np.array([1e-12]))[0])
+
+
 def test_on_its_way_asks_the_slow_modes_rate():
     """On a period map y -> y* + M (y - y*) + r whose slowest multiplier is -0.99 and whose
     monodromy is non-normal (the slow coordinate is x - 4.2 y): a remainder r along y of
@@ -250,12 +258,10 @@ def test_on_its_way_asks_the_slow_modes_rate():
     speeds it 9-fold and one of 0.2 % 1.8-fold (within RATE: on its way), and one of 0.6 %
     the other way makes it grow (not)."""
     m = np.array([[-0.99, 5.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.1]])
-    fixed, scale, e0 = np.array([1.0, -2.0, 0.5]), np.ones(3), np.array([0.05, 0.0, 0.0])
+    e0 = np.array([0.05, 0.0, 0.0])
 
     def judge(remainder):
-        e1 = m @ e0 + np.array([0.0, remainder, 0.0])
-        return bool(orbits.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([1]),
-                                      fixed[None], m[None], scale[None], np.array([1e-12]))[0])
+        return _on_its_way(m, e0, m @ e0 + np.array([0.0, remainder, 0.0]))
 
     assert judge(0.0) and judge(-1e-4) and judge(-1e-3)
     assert not judge(-3e-3) and not judge(3e-3) and not judge(3e-4)
@@ -267,12 +273,9 @@ def test_on_its_way_follows_the_monodromys_prediction():
     at first and whose prediction stays within NEAR is on its way; one whose prediction
     leaves NEAR, one that does not follow the prediction, and one beyond NEAR are not."""
     m = np.array([[0.9, 1.0, 0.0], [0.0, 0.9, 0.0], [0.0, 0.0, 0.3]])
-    fixed, scale = np.array([1.0, -2.0, 0.5]), np.ones(3)
 
     def judge(e0, maps=1, moved=np.zeros(3)):
-        e1 = np.linalg.matrix_power(m, maps) @ e0 + moved
-        return bool(orbits.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([maps]),
-                                      fixed[None], m[None], scale[None], np.array([1e-12]))[0])
+        return _on_its_way(m, e0, np.linalg.matrix_power(m, maps) @ e0 + moved, maps)
 
     small = np.array([0.01, 0.02, 0.0])  # |M^k e| peaks near 0.081 (k = 9)
     assert np.linalg.norm(m @ small, np.inf) > 1.4 * np.linalg.norm(small, np.inf)
