@@ -25,12 +25,13 @@ import numpy as np
 
 from benchmarks.steady_states import _cpu
 from harvester_sweep import continue_branch, run_sweep
-from harvester_sweep._engine import warm_up
+from harvester_sweep._engine import STATUS, warm_up
 from harvester_sweep.outputs import BIFURCATIONS
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "benchmarks" / "results" / "s_curve.md"
 START, STOP, GAP = 150.0, 300.0, 1e-6
+SETTLED = STATUS.settled
 
 
 def main() -> None:
@@ -87,14 +88,20 @@ def main() -> None:
         for direction, fold, window in (("up", high, (240.0, 270.0)),
                                         ("down", low, (210.0, 230.0))):
             x = ds["x_max"].sel(direction=direction).values
-            inside = np.flatnonzero((f > window[0]) & (f < window[1]))
+            # (a point that did not settle is on neither branch: it is listed, not counted)
+            settled = ds["status"].sel(direction=direction).values == SETTLED
+            near = (f > window[0]) & (f < window[1])
+            inside = np.flatnonzero(near & settled)
             jump = np.flatnonzero(np.diff(x[inside] > 1.1 * GAP))
             if jump.size != 1:
                 cells.append(f"{jump.size} jumps in {window[0]:g}-{window[1]:g} Hz")
                 continue
             a, b = f[inside][jump[0]], f[inside][jump[0] + 1]
+            unsettled = f[near & ~settled]
             cells.append(f"{a:.3f}-{b:.3f} Hz (fold {fold:.5f}: "
-                         + ("inside" if a < fold < b else "outside") + ")")
+                         + ("inside" if a < fold < b else "outside") + ")"
+                         + (f", not settled at {', '.join(f'{u:.3f}' for u in unsettled)} Hz"
+                            if unsettled.size else ""))
         lines.append(f"| {spacing:g} | {2 * num} | {wall:.2f} | {cells[0]} | {cells[1]} |")
     needed = 2 * ((STOP - START) / precision + 1)
     lines += ["", f"A sweep that brackets the band edges to the continuation's widest bracket "
