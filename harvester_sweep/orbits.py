@@ -12,7 +12,11 @@ How, and why (docs/numerics.md, "Periodic orbits"):
   in one lane and, in three more, from it moved by ``PERTURBATION`` of each component's
   scale: the columns of the monodromy are the forward differences. The copies are
   ordinary points of the lane engine (the same RK4, switches located as in the run), so
-  the matrix includes the contact switches without any saltation algebra.
+  the matrix includes the contact switches without any saltation algebra. A converged
+  orbit is judged, and its multipliers given, on central differences (``CENTRAL``, six
+  copies), where its map is not affine: near grazing the map bends too sharply for the
+  forward ones. An iterate a small Newton step (``LAST_STEP``) from the last runs its
+  copies both ways at once, as it is likely the orbit.
 - **Chord steps.** An iterate reuses the last monodromy and runs its centre lane alone
   where that monodromy is still the map's: no lane of its run touched a stop (the map is
   affine off the stop), or the iterate moved less than ``CHORD`` from where it was taken.
@@ -22,8 +26,8 @@ How, and why (docs/numerics.md, "Periodic orbits"):
   (:func:`free_monodromy`); if it touched after all, it is run again with copies.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
   first evaluation is also the trajectory's next p periods. A converged fixed point is
-  taken only when it is stable (spectral radius below 1) and the trajectory is on its
-  way to it:
+  taken only when it is stable (spectral radius below 1, by central differences) and the
+  trajectory is on its way to it:
   * an orbit that never reaches the stop is the fixed point of an affine map, found in
     one Newton step; it is taken only once it is proved that the trajectory from ``t``
     never reaches the stop either: the homogeneous part of a linear motion loses energy
@@ -31,9 +35,8 @@ How, and why (docs/numerics.md, "Periodic orbits"):
     ``x(t) <= x*_max + sqrt(2 E(t - y*) / k)`` for all later times (and
     ``x(t) >= x*_min - sqrt(2 E / k)`` against a lower stop);
   * an orbit with contact is taken when ``t`` is in its linear regime: within ``NEAR``
-    of it, the monodromy predicts ``P^p(t)`` (to ``LINEAR_REGIME``, and its rate along
-    the slowest mode to ``RATE``), and its prediction from there stays within ``NEAR``
-    (:func:`on_its_way`);
+    of it, the monodromy predicts ``P^p(t)`` (to ``LINEAR_REGIME``), and its prediction
+    from there stays within ``NEAR`` (:func:`on_its_way`);
     an attempt whose first monodromy, at ``t``, expands ends at once (``EXPANDING``).
   Otherwise the trajectory is integrated on (a chunk as long as all it has run so far,
   at least ``FIRST_CHUNK`` periods) and Newton tried again from where it got to; a point
@@ -61,10 +64,23 @@ from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, N_STROBE, NO_STOP, PARAM
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
+#: Central-difference step of the monodromy an orbit is judged on and reports, relative to
+#: each component's scale. The period map of a switched contact bends sharply near some
+#: orbits (grazing): forward differences at PERTURBATION put a spectral radius 0.016 off,
+#: and two orbits' 1.0036 and 1.0003 at 0.9963 and 0.9985, stable; central ones at 1e-6
+#: still err by up to 0.02 where the map bends within that scale, and at this step agree
+#: with those at 1e-8 to 1.2e-5 at every settled point of the two 64 x 64 grids but one,
+#: whose map is not smooth at any step tried (docs/numerics.md) [-].
+CENTRAL = 1e-7
 #: A Newton iterate this near the one its monodromy was taken at (relative to the scales)
 #: reuses that monodromy (a chord step: its centre lane alone): the monodromy changes by
 #: no more than its own forward differences span [-].
 CHORD = PERTURBATION
+#: A Newton step below this (relative to the scales) likely brings the iterate within the
+#: floor of the orbit: the next iterate's copies run both ways, so that the monodromy by
+#: central differences the orbit is judged on (see _after_newton) needs no run of its
+#: own [-].
+LAST_STEP = 1e-3
 #: Newton iterations of one attempt before it is given up [-].
 MAX_NEWTON = 8
 #: A trajectory's state is in the linear regime of a fixed point when the monodromy
@@ -84,16 +100,6 @@ EXPANDING = 1.0
 NEAR = 0.1
 #: Maps of p periods the monodromy's prediction is followed to see that it stays NEAR [-].
 AHEAD = 16
-#: ... and the motion's rate along the slowest mode is the monodromy's to within this
-#: factor either way: over q maps of a linear map the slow coordinate shrinks by exactly
-#: ``|mu|^q`` (mu the largest multiplier), whatever the monodromy's non-normality. Where
-#: ``|mu|`` is close to 1 the rest of the prediction is too small to tell the orbit's
-#: linear regime. The factor is wide because one map of a multiplier near -1 is blurred
-#: by the map's quadratic term, which two maps cancel: among the points whose status it
-#: decides on the benchmark grids and in the 1e6 sweep, the slow orbits the transient
-#: reaches were approached at 0.5-6 times the monodromy's rate, the two orbits the
-#: motion does not settle on at 24 and 40 times it (docs/numerics.md) [-].
-RATE = 10.0
 #: Steps per period of the linear motion that guesses whether a motion no run has taken
 #: yet will touch a stop in its first period (_engine.free_extent) [-].
 GUESS_STEPS = 64
@@ -105,6 +111,10 @@ FIRST_CHUNK = 8
 #: The most periods of trajectory one round runs for a point [periods]: a longer chunk
 #: goes on in the next rounds, so that no round waits long for one lane.
 SLICE = 64
+#: The error estimate's run at twice the steps may stop short of that orbit by this share
+#: of the change it measures, relative to the scales: power, the square of the amplitudes,
+#: is then off the orbit's by a tenth of the change at most [-].
+LOCATED = 0.05
 #: Re-solves at a finer step for the accuracy target [-].
 REFINEMENTS = 3
 #: Newton's floor from rounding: a correction below this many rounding units of the
@@ -236,12 +246,10 @@ def on_its_way(t0, t1, q, y, jac, scale, floor):
     components relative to ``scale`` (n, D), with Newton's floor ``floor`` (n,) [-].
 
     Yes where ``t0`` is on the fixed point (within the floor), or where it is within NEAR
-    of it, the monodromy predicts ``t1 - y`` from ``t0 - y`` to LINEAR_REGIME of its size
-    and the rate along its slowest mode to a factor RATE (where that mode is a
-    LINEAR_REGIME share of the distance at least), and the prediction from ``t1`` for
-    AHEAD more maps stays within NEAR, where the linear regime was seen to hold. (A motion
-    may first move away from a stable orbit, as one of a non-normal monodromy does: on its
-    way too, if it stays near.)
+    of it, the monodromy predicts ``t1 - y`` from ``t0 - y`` to LINEAR_REGIME of its size,
+    and the prediction from ``t1`` for AHEAD more maps stays within NEAR, where the linear
+    regime was seen to hold. (A motion may first move away from a stable orbit, as one of
+    a non-normal monodromy does: on its way too, if it stays near.)
     """
     d0 = _norm(t0 - y, scale)
     d1 = _norm(t1 - y, scale)
@@ -256,49 +264,37 @@ def on_its_way(t0, t1, q, y, jac, scale, floor):
         ahead = np.einsum("nij,nj->ni", jac, ahead)
         stays &= _norm(ahead, scale) <= NEAR
     way = (d0 <= NEAR) & linear & stays & (d0 > floor)
-    # (the slow mode's rate last: an eigen-decomposition, for the few still on their way)
-    way[way] = _slow_rate_agrees(t0[way] - y[way], t1[way] - y[way], q[way], jac[way],
-                                 scale[way])
     return (d0 <= floor) | way
 
 
-def _slow_rate_agrees(e0, e1, q, jac, scale):
-    """Whether the distances ``e0`` (n, D) and ``e1`` (n, D), q (n,) maps apart, shrink
-    along the slowest mode of ``jac`` (n, D, D) at its rate to a factor RATE (see RATE);
-    yes where that mode is less than LINEAR_REGIME of ``e0``, relative to ``scale``."""
-    if not len(q):
-        return np.ones(0, bool)
-    # (in scaled components, where the unit left eigenvectors weigh them alike)
-    mu, left = np.linalg.eig(np.swapaxes(jac, 1, 2) * scale[:, :, None] / scale[:, None, :])
-    k = np.argmax(np.abs(mu), axis=1)
-    w = np.take_along_axis(left, k[:, None, None], axis=2)[..., 0]
-    s0 = np.abs(np.einsum("ni,ni->n", w, e0 / scale))
-    s1 = np.abs(np.einsum("ni,ni->n", w, e1 / scale))
-    predicted = 1 - np.abs(np.take_along_axis(mu, k[:, None], axis=1)[:, 0]) ** q
-    with np.errstate(divide="ignore", invalid="ignore"):
-        observed = 1 - s1 / s0
-    agrees = (observed * RATE >= predicted) & (observed <= RATE * predicted)
-    return agrees | (s0 < LINEAR_REGIME * np.linalg.norm(e0 / scale, axis=1))
-
-
-def perturbed_copies(states, scale):
+def perturbed_copies(states, scale, central=False):
     """Each state (n, len(STATE)) and D copies moved by PERTURBATION of ``scale`` (n, D)
-    along each of its first D components: (n * (D + 1), len(STATE)), the copies of a
-    state after it (D = scale.shape[1])."""
+    along each of its first D components: (n * (D + 1), len(STATE)); with ``central``, 2 D
+    copies moved by CENTRAL, the D moved the other way after the others:
+    (n * (2 D + 1), len(STATE)); the copies of a state after it (D = scale.shape[1])."""
     D = scale.shape[1]
     n = len(states)
-    out = np.repeat(states, D + 1, axis=0).reshape(n, D + 1, states.shape[1])
+    width = 2 * D + 1 if central else D + 1
+    out = np.repeat(states, width, axis=0).reshape(n, width, states.shape[1])
     for c in range(D):
-        out[:, c + 1, c] += PERTURBATION * scale[:, c]
+        if central:
+            out[:, c + 1, c] += CENTRAL * scale[:, c]
+            out[:, D + c + 1, c] -= CENTRAL * scale[:, c]
+        else:
+            out[:, c + 1, c] += PERTURBATION * scale[:, c]
     return out.reshape(-1, states.shape[1])
 
 
 def monodromy(ends, scale):
-    """The monodromy matrices (n, D, D) by forward differences from the end states
-    (n, D + 1, >= D) of the runs of :func:`perturbed_copies` with the same ``scale`` (n, D)."""
+    """The monodromy matrices (n, D, D) from the end states (n, D + 1, >= D) or
+    (n, 2 D + 1, >= D) of the runs of :func:`perturbed_copies` with the same ``scale``
+    (n, D): by forward differences, or by central ones."""
     D = scale.shape[-1]
-    h = PERTURBATION * scale
-    return (ends[:, 1:, :D] - ends[:, :1, :D]).transpose(0, 2, 1) / h[:, None, :]
+    if ends.shape[1] == 2 * D + 1:
+        diff, h = (ends[:, 1:D + 1, :D] - ends[:, D + 1:, :D]) / 2, CENTRAL * scale
+    else:
+        diff, h = ends[:, 1:, :D] - ends[:, :1, :D], PERTURBATION * scale
+    return diff.transpose(0, 2, 1) / h[:, None, :]
 
 
 def sorted_multipliers(jacobians):
@@ -349,6 +345,10 @@ class _Points:
         self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
         self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
         self.affine = np.zeros(n, bool)  # ... taken where no lane touched a stop
+        self.central = np.zeros(n, bool)  # the next copies run both ways
+        # newton_jacobian is one to judge an orbit on: by central differences, or of a map
+        # affine where it was taken (where forward differences are exact)
+        self.exact = np.zeros(n, bool)
         # the run Newton starts from touched a stop (before any run: the linear motion's
         # first period says whether it will)
         self.touched = np.zeros(n, bool)
@@ -415,10 +415,10 @@ class _Points:
         """Newton's first run from points ``idx``' iterates: where the motion was clear of
         the stops, it is likely to be too, so its centre lane alone, with the contact-free
         map's monodromy (run again with copies if it touched after all); else with copies."""
-        self.chord[idx] = False
+        self.chord[idx] = self.central[idx] = self.exact[idx] = False
         free = idx[~self.touched[idx]]
         if self.D == D and free.size:  # (a moving stop's map is not the tip's alone)
-            self.chord[free] = self.affine[free] = True
+            self.chord[free] = self.affine[free] = self.exact[free] = True
             self.newton_jacobian[free] = free_monodromy(self.rows[free], self.steps[free],
                                                         self.p[free])
 
@@ -428,19 +428,26 @@ class _Points:
         """Run every point's next request in one engine call and act on the results;
         returns the number of points that finished."""
         iterate = self.phase == _NEWTON
-        newton = np.flatnonzero(iterate & ~self.chord)  # with the copies of the monodromy
+        copied = iterate & ~self.chord  # with the copies of the monodromy
+        blocks = [(np.flatnonzero(copied & ~self.central), self.D + 1),  # forward
+                  (np.flatnonzero(copied & self.central), 2 * self.D + 1)]  # central
         chord = np.flatnonzero(iterate & self.chord)
         transient = np.flatnonzero(self.phase == _TRANSIENT)
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
-        owners = np.concatenate([np.repeat(newton, self.D + 1), chord, transient, estimate])
+        owners = np.concatenate([np.repeat(b, w) for b, w in blocks]
+                                + [chord, transient, estimate])
         rows = self.rows[owners].copy()
-        states = np.concatenate([perturbed_copies(self.y[newton], self.scale[newton]),
-                                 self.y[chord], self.traj[transient], self.y[estimate]])
+        states = np.concatenate([perturbed_copies(self.y[b], self.scale[b], w > self.D + 1)
+                                 for b, w in blocks]
+                                + [self.y[chord], self.traj[transient], self.y[estimate]])
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
-        k = len(newton) * (self.D + 1)
+        k = sum(len(b) * w for b, w in blocks)
         copies = np.arange(len(owners)) < k
-        copies[:k:self.D + 1] = False
+        start = 0
+        for b, w in blocks:
+            copies[start:start + len(b) * w:w] = False
+            start += len(b) * w
         rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
         j = k + len(chord)
         rows[j:j + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
@@ -455,29 +462,40 @@ class _Points:
         _engine.run_points(rows, states, metrics, strobes, settle=True)
         np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
         before = int((self.phase == _DONE).sum())
-        m = metrics[:k].reshape(len(newton), self.D + 1, len(METRIC))
-        f = states[:k].reshape(len(newton), self.D + 1, len(STATE))
-        lanes_ok = np.all(_sane(m), axis=1) & np.all(np.isfinite(f[:, :, :self.D]), axis=(1, 2))
-        jac = monodromy(f, self.scale[newton])
-        # (the copies book no extrema: their impacts alone say they stayed clear)
-        r = self.rows[newton, None]
-        self.affine[newton] = ~self._touched(newton, m[:, 0]) & np.all(
-            ((r[..., PARAM.khm] == 0) | (m[:, 1:, METRIC.impacts_per_period] == 0))
-            & ((r[..., PARAM.lower_khm] == 0) | (m[:, 1:, METRIC.impacts_per_period_lower] == 0)),
-            axis=1)
+        runs, start = [], 0
+        for b, w in blocks:
+            runs.append(self._copies(b, metrics[start:start + len(b) * w],
+                                     states[start:start + len(b) * w],
+                                     strobes[start:start + len(b) * w:w], w))
+            start += len(b) * w
+        self.central[blocks[1][0]] = False
         c = slice(k, k + len(chord))
         chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)
-        self._after_newton(np.concatenate([newton, chord]),
-                           np.concatenate([m[:, 0], metrics[c]]),
-                           np.concatenate([f[:, 0], states[c]]),
-                           np.concatenate([strobes[:k:self.D + 1], strobes[c]]),
-                           np.concatenate([jac, self.newton_jacobian[chord]]),
-                           np.concatenate([lanes_ok, chord_ok]))
+        runs.append((metrics[c], states[c], strobes[c], self.newton_jacobian[chord], chord_ok))
+        self._after_newton(np.concatenate([b for b, _ in blocks] + [chord]),
+                           *(np.concatenate(parts) for parts in zip(*runs)))
         j = slice(k + len(chord), k + len(chord) + len(transient))
         self._after_transient(transient, metrics[j], states[j], strobes[j])
         j = slice(k + len(chord) + len(transient), None)
         self._after_estimate(estimate, metrics[j], states[j])
         return int((self.phase == _DONE).sum()) - before
+
+    def _copies(self, idx, metrics, states, strobes, width):
+        """The runs of points ``idx`` with their perturbed copies, ``width`` lanes each
+        (metrics and end states of every lane, strobes of the centre lanes): the centre
+        lanes' metrics, end states and strobes, the monodromy, and whether every lane ran
+        sane and finite."""
+        m = metrics.reshape(len(idx), width, len(METRIC))
+        f = states.reshape(len(idx), width, len(STATE))
+        ok = np.all(_sane(m), axis=1) & np.all(np.isfinite(f[:, :, :self.D]), axis=(1, 2))
+        # (the copies book no extrema: their impacts alone say they stayed clear)
+        r = self.rows[idx, None]
+        self.affine[idx] = ~self._touched(idx, m[:, 0]) & np.all(
+            ((r[..., PARAM.khm] == 0) | (m[:, 1:, METRIC.impacts_per_period] == 0))
+            & ((r[..., PARAM.lower_khm] == 0) | (m[:, 1:, METRIC.impacts_per_period_lower] == 0)),
+            axis=1)
+        self.exact[idx] = self.affine[idx] | (width > self.D + 1)
+        return m[:, 0], f[:, 0], strobes, monodromy(f, self.scale[idx]), ok
 
     # -- Newton ------------------------------------------------------------------------
 
@@ -564,6 +582,13 @@ class _Points:
         # the same iterate, with copies
         again = recheck | (stalled | self.affine[idx] & touched) & self.chord[idx] & ~far \
             & ~diverged & (self.iteration[idx] + 1 < MAX_NEWTON)
+        # a converged orbit is judged, and its multipliers given, on a monodromy by central
+        # differences (CENTRAL) where its map is not affine: the forward ones err by
+        # PERTURBATION times the map's curvature; so its copies run again from the same
+        # iterate, both ways
+        sharpen = converged & ~again & ~self.exact[idx] & ~diverged
+        self.central[idx[sharpen]] = True
+        again |= sharpen
         converged &= ~again
         failed = far | stalled & ~again
         going = ~converged & ~failed & ~diverged & ~again
@@ -580,6 +605,8 @@ class _Points:
         self.iteration[g] += 1
         self.last[g] = size[going]
         self.chord[g] = self.affine[g] | (size[going] <= CHORD)
+        # (an iterate this near is likely the orbit: its copies run both ways at once)
+        self.central[g] = ~self.chord[g] & (size[going] <= LAST_STEP)
         # converged: a fixed point; taken or not
         c = idx[converged]
         if c.size:
@@ -746,7 +773,11 @@ class _Points:
             residual = f[ok, :self.D] - self.y[idx[ok], :self.D]
             step[ok] = np.linalg.solve(a[ok], residual[..., None])[..., 0]
         size = np.where(ok, _norm(step, self.scale[idx]), np.inf)
-        converged = ok & (size <= self.floor[idx])
+        # (or the run is near enough the orbit at twice the steps for the change it
+        # measures: where the map is not smooth at Newton's floor the iterates contract
+        # slowly, and four runs may not reach it)
+        located = size <= LOCATED * np.where(ok, halving_error(self.metrics[idx], m), 0.0)
+        converged = ok & ((size <= self.floor[idx]) | located)
         self.iteration[idx] += 1
         failed = ~converged & (self.iteration[idx] >= 4)
         going = ~converged & ~failed

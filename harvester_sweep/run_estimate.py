@@ -34,9 +34,10 @@ LONG_RUN_SECONDS = 3600.0
 #: with their copies (D + 1 lanes), chord steps (one lane) and the error estimate (two runs
 #: at twice the steps): an orbit clear of the stop takes the motion's one period (a chord
 #: step with the contact-free map's monodromy) and a second chord step; one with contact
-#: the attempt from rest and about three iterates after its motion.
+#: the attempt from rest and about three iterates after its motion, the last with its
+#: copies both ways (2 D + 1 lanes: the monodromy by central differences).
 FREE_PERIODS = 1 + 1 + 2 * 2
-CONTACT_PERIODS = (D + 1) + 3 * (D + 1) + 2 * 2
+CONTACT_PERIODS = (D + 1) + 2 * (D + 1) + (2 * D + 1) + 2 * 2
 #: Points whose parameters are resolved for the estimate, spread evenly over the grid.
 SAMPLE_POINTS = 64
 

@@ -2,7 +2,7 @@
 
 What is asserted, for the ``paper`` and ``strong_coupling`` scenes (one impact per period):
 
-- the engine's multipliers (eigenvalues of its monodromy, the forward-difference Jacobian of
+- the engine's multipliers (eigenvalues of its monodromy, the central-difference Jacobian of
   its own RK4 period map) equal the eigenvalues of the Jacobian of the exact period map,
   to within RK4's error at the automatic step;
 - both say the orbit is a stable attractor (spectral radius below 1);
@@ -32,9 +32,10 @@ from tests.helpers import period_map_jacobian
 SCENES = ["paper", "strong_coupling"]
 
 # Measured |engine - reference| / |reference| per multiplier, automatic step (1168 and 1232
-# steps per period): paper 5.0e-6 (the complex pair, |mu| = 0.772) and 1.5e-7 (the
-# electrical multiplier, ~exp(-T / (R C_p)) = 7.9e-4); strong_coupling 1.9e-6 (pair,
-# |mu| = 0.739) and 3.2e-7 (8.7e-4). Four times the largest:
+# steps per period): paper 5.0e-6 (the complex pair, |mu| = 0.772) and 1.6e-7 (the
+# electrical multiplier, ~exp(-T / (R C_p)) = 7.9e-4); strong_coupling 1.8e-6 (pair,
+# |mu| = 0.739) and 3.2e-6 (8.7e-4; the central differences' rounding, 2.8e-9 of it). Four
+# times the largest:
 MULTIPLIER_RTOL = 2e-5
 
 
@@ -115,11 +116,11 @@ def test_multiplier_error_is_discretization_error(scene):
     """Halving the engine's step shrinks the multipliers' distance to the reference.
 
     Measured error of the complex pair at 1024 / 2048 / 4096 / 8192 steps per period:
-    paper 1.0e-5 / 2.1e-6 / 3.6e-7 / 2.5e-7, strong_coupling 4.1e-5 / 5.2e-6 / 7.4e-7 /
-    8.6e-8: an order of 2.3 to 3 rather than RK4's 4 (the state converges at order 4,
+    paper 1.0e-5 / 2.1e-6 / 3.3e-7 / 2.3e-7, strong_coupling 4.1e-5 / 5.2e-6 / 7.8e-7 /
+    4.1e-8: an order of 2.3 to 3 rather than RK4's 4 (the state converges at order 4,
     tests/physics/test_contact_reference.py; the derivative of the Hertz force,
-    1.5 k_h delta^0.5, is not smooth at touch). The floor near 2.5e-7 at 8192 (paper) is the
-    forward-difference monodromy's own error."""
+    1.5 k_h delta^0.5, is not smooth at touch). The floor near 2.3e-7 at 8192 (paper) is
+    there with forward differences as with central ones."""
     errors = [relative_error(run_scene(scene["name"], steps_per_period=n).metrics,
                              scene["reference"])[:2].max() for n in (1024, 2048)]
     assert errors[1] < errors[0] / 3, errors

@@ -122,7 +122,7 @@ def test_a_moving_stop_orbit_is_scipys(case):
 
 def test_the_moving_stops_five_floquet_multipliers_are_scipys():
     """The monodromy of the soft stop's orbit over (x, v, V, x_s, v_s): the engine's
-    forward differences of its RK4 period map against central differences of SciPy's.
+    central differences of its RK4 period map against central differences of SciPy's.
     (The reference's difference step: its multiplier near -0.54 reads -0.54126, -0.54048,
     -0.54040 at 1e-5, 3e-5, 1e-4 of the scales, SciPy's own error divided by the step;
     the engine's is -0.54039.)"""
