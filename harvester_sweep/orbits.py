@@ -468,7 +468,10 @@ class _Points:
                                      states[start:start + len(b) * w],
                                      strobes[start:start + len(b) * w:w], w))
             start += len(b) * w
+        # (a step by central differences is not compared with the last one, by forward
+        # differences: near grazing that one can be several times off)
         self.central[blocks[1][0]] = False
+        self.last[blocks[1][0]] = np.inf
         c = slice(k, k + len(chord))
         chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)
         runs.append((metrics[c], states[c], strobes[c], self.newton_jacobian[chord], chord_ok))
