@@ -590,7 +590,10 @@ class _Points:
         # PERTURBATION times the map's curvature; so its copies run again from the same
         # iterate, both ways
         sharpen = converged & ~again & ~self.exact[idx] & ~diverged
-        self.central[idx[sharpen]] = True
+        # (and in a re-solve at a finer step, which has no other way to its orbit, a chord
+        # step that stalled had a monodromy too far off to contract: near grazing forward
+        # differences can be, so it is taken again by central ones)
+        self.central[idx[sharpen | again & stalled & (self.refine[idx] > 0)]] = True
         again |= sharpen
         converged &= ~again
         failed = far | stalled & ~again
