@@ -468,10 +468,14 @@ class _Points:
                                      states[start:start + len(b) * w],
                                      strobes[start:start + len(b) * w:w], w))
             start += len(b) * w
-        # (a step by central differences is not compared with the last one, by forward
-        # differences: near grazing that one can be several times off)
+        # (in a re-solve at a finer step, a step by central differences is not compared
+        # with the last one, by forward differences: near grazing that one can be several
+        # times off. In a first solve a step that does not contract ends the attempt, as it
+        # did: there it also turns away orbits the motion does not reach, one of the 1e6
+        # sweep's among them, which the motion passes within 0.025 of)
         self.central[blocks[1][0]] = False
-        self.last[blocks[1][0]] = np.inf
+        resolved = blocks[1][0][self.refine[blocks[1][0]] > 0]
+        self.last[resolved] = np.inf
         c = slice(k, k + len(chord))
         chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)
         runs.append((metrics[c], states[c], strobes[c], self.newton_jacobian[chord], chord_ok))
