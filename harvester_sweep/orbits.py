@@ -267,33 +267,44 @@ def on_its_way(t0, t1, q, y, jac, scale, floor):
     return (d0 <= floor) | way
 
 
-def perturbed_copies(states, scale, central=False):
+def perturbed_copies(states, scale, central=False, spread=False):
     """Each state (n, len(STATE)) and D copies moved by PERTURBATION of ``scale`` (n, D)
     along each of its first D components: (n * (D + 1), len(STATE)); with ``central``, 2 D
     copies moved by CENTRAL, the D moved the other way after the others:
-    (n * (2 D + 1), len(STATE)); the copies of a state after it (D = scale.shape[1])."""
+    (n * (2 D + 1), len(STATE)); with ``spread``, 2 D more after those, moved by twice
+    CENTRAL each way: (n * (4 D + 1), len(STATE)); the copies of a state after it
+    (D = scale.shape[1])."""
     D = scale.shape[1]
     n = len(states)
-    width = 2 * D + 1 if central else D + 1
+    moves = [PERTURBATION] if not (central or spread) \
+        else [CENTRAL, -CENTRAL] + ([2 * CENTRAL, -2 * CENTRAL] if spread else [])
+    width = 1 + D * len(moves)
     out = np.repeat(states, width, axis=0).reshape(n, width, states.shape[1])
-    for c in range(D):
-        if central:
-            out[:, c + 1, c] += CENTRAL * scale[:, c]
-            out[:, D + c + 1, c] -= CENTRAL * scale[:, c]
-        else:
-            out[:, c + 1, c] += PERTURBATION * scale[:, c]
+    for k, move in enumerate(moves):
+        for c in range(D):
+            out[:, 1 + k * D + c, c] += move * scale[:, c]
     return out.reshape(-1, states.shape[1])
 
 
 def monodromy(ends, scale):
-    """The monodromy matrices (n, D, D) from the end states (n, D + 1, >= D) or
-    (n, 2 D + 1, >= D) of the runs of :func:`perturbed_copies` with the same ``scale``
-    (n, D): by forward differences, or by central ones."""
+    """The monodromy matrices (n, D, D) from the end states (n, D + 1 | 2 D + 1 | 4 D + 1,
+    >= D) of the runs of :func:`perturbed_copies` with the same ``scale`` (n, D): by
+    forward differences, by central ones, or (spread) by the median of the four slopes
+    between the five states along each component."""
     D = scale.shape[-1]
-    if ends.shape[1] == 2 * D + 1:
-        diff, h = (ends[:, 1:D + 1, :D] - ends[:, D + 1:, :D]) / 2, CENTRAL * scale
+    e = ends[..., :D]
+    if e.shape[1] == 4 * D + 1:
+        # The RK4 map with located switches jumps by about its own error where a switch
+        # crosses a step's end: a slope across such a jump is far off, the other three
+        # are near the derivative (the median, to the first order in the step)
+        row = [e[:, 3 * D + 1:], e[:, D + 1:2 * D + 1], np.repeat(e[:, :1], D, axis=1),
+               e[:, 1:D + 1], e[:, 2 * D + 1:3 * D + 1]]  # at -2h, -h, 0, h, 2h
+        slopes = np.sort(np.diff(np.stack(row), axis=0), axis=0)
+        diff, h = (slopes[1] + slopes[2]) / 2, CENTRAL * scale
+    elif e.shape[1] == 2 * D + 1:
+        diff, h = (e[:, 1:D + 1] - e[:, D + 1:]) / 2, CENTRAL * scale
     else:
-        diff, h = ends[:, 1:, :D] - ends[:, :1, :D], PERTURBATION * scale
+        diff, h = e[:, 1:] - e[:, :1], PERTURBATION * scale
     return diff.transpose(0, 2, 1) / h[:, None, :]
 
 

@@ -86,6 +86,36 @@ def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     assert not np.allclose(closed, np.eye(3))  # (a map that moves)
 
 
+def test_spread_differences_step_over_a_jump_of_the_map():
+    """The RK4 map with located switches jumps by about its own error where a switch
+    crosses a step's end (docs/numerics.md). On a map with a known Jacobian, smooth but
+    for a jump of 1e-6 of the scale just past the central copy along x, the spread copies'
+    median slope gives the Jacobian to the order of the curvature (0.01 x 2e-7), where
+    central differences, whose copy straddles the jump, are 5 off."""
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=(3, 3))
+    scale = np.array([[1e-6, 1e-3, 1.0]])
+    y0 = np.array([[2e-7, -3e-4, 0.4, 0.0, 0.0, 0.0]])
+
+    def ends(states):
+        z = states[:, :3] / scale
+        jump = (z[:, 0] > z0[0] + 0.5 * orbits.CENTRAL) * 1e-6
+        out = states.copy()
+        out[:, :3] = (z @ a.T + 0.01 * z[:, :1] ** 2 + jump[:, None]) * scale
+        return out
+
+    z0 = y0[0, :3] / scale[0]
+    exact = a.copy()
+    exact[:, 0] += 0.02 * z0[0]
+    exact = exact * scale[0][:, None] / scale[0][None, :]
+    for spread, wrong in ((True, False), (False, True)):
+        states = ends(orbits.perturbed_copies(y0, scale, central=True, spread=spread))
+        m = orbits.monodromy(states.reshape(1, -1, len(y0[0])), scale)[0]
+        error = np.abs(m - exact) * scale[0][None, :] / scale[0][:, None]
+        assert (np.max(error) > 1) == wrong, (spread, np.max(error))
+        assert spread is False or np.max(error) < 1e-8
+
+
 def test_the_spectral_radius_is_the_rate_at_which_the_motion_returns():
     """The power method on the engine's own period map: from 1e-6 of a period-4 orbit of
     issue 19's grid (gap 2.70 um, 138.1 Hz, 1024 steps per period), the motion's change
