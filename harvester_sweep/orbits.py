@@ -115,8 +115,14 @@ SLICE = 64
 #: of the change it measures, relative to the scales: power, the square of the amplitudes,
 #: is then off the orbit's by a tenth of the change at most [-].
 LOCATED = 0.05
+#: Runs of the error estimate at twice the steps before it is given up [-].
+ESTIMATE_RUNS = 4
 #: Re-solves at a finer step for the accuracy target [-].
 REFINEMENTS = 3
+#: A re-solve whose error estimate fell slower than this order of the step asks for
+#: twice the steps next, not for the fourth order's: near grazing the estimate wanders
+#: about its trend from one step to the next (docs/numerics.md) [-].
+SLOW_ORDER = 2.0
 #: Newton's floor from rounding: a correction below this many rounding units of the
 #: period map, times the conditioning of I - M, is converged.
 ROUNDING = 100 * np.finfo(float).eps
@@ -374,6 +380,7 @@ class _Points:
         self.strobes = np.full((n, SAMPLES, self.D), np.nan)
         self.finals = states.copy()
         self.errors = np.full(n, np.nan)
+        self.coarser = np.full((n, 2), np.nan)  # steps and error estimate of the last solve
         self.status = np.full(n, STATUS.not_settled)
 
     # -- set-up ------------------------------------------------------------------------
@@ -595,6 +602,14 @@ class _Points:
         stalled = ~converged & ~diverged & (
             ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
             | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
+        # in a re-solve at a finer step, an iterate that stalls within a quarter of the
+        # accuracy target of its orbit is taken: where the map jumps near Newton's floor
+        # (by about its own error where a switch crosses a step's end) the iterates stall
+        # short of it, and the re-solve kept the coarser orbit, above the target; the error
+        # estimate that follows measures the orbit as taken
+        enough = stalled & good & (self.refine[idx] > 0) & (size <= 0.25 * self.accuracy[idx])
+        converged |= enough
+        stalled &= ~enough
         # a chord step that stalls, or that touched a stop with the monodromy of an affine
         # run (converged or not: that monodromy is not the orbit's), is taken again from
         # the same iterate, with copies
@@ -794,25 +809,40 @@ class _Points:
             residual = f[ok, :self.D] - self.y[idx[ok], :self.D]
             step[ok] = np.linalg.solve(a[ok], residual[..., None])[..., 0]
         size = np.where(ok, _norm(step, self.scale[idx]), np.inf)
+        with np.errstate(invalid="ignore"):
+            change = np.where(ok, halving_error(self.metrics[idx], m), np.nan)
         # (or the run is near enough the orbit at twice the steps for the change it
         # measures: where the map is not smooth at Newton's floor the iterates contract
         # slowly, and four runs may not reach it)
-        located = size <= LOCATED * np.where(ok, halving_error(self.metrics[idx], m), 0.0)
-        converged = ok & ((size <= self.floor[idx]) | located)
+        converged = ok & ((size <= self.floor[idx]) | (size <= LOCATED * change))
         self.iteration[idx] += 1
-        failed = ~converged & (self.iteration[idx] >= 4)
+        last = ~converged & (self.iteration[idx] >= ESTIMATE_RUNS)
+        # at the last run, an estimate still not located but farther from the target than
+        # the run is from the finer orbit says whether the target is met (the metrics of
+        # a run move by about twice its start's distance, power being a square): where the
+        # map jumps near Newton's floor the iterates may stall short of LOCATED
+        decided = last & ok & (np.abs(change - self.accuracy[idx]) >= 2 * size)
+        converged |= decided
+        failed = last & ~decided
         going = ~converged & ~failed
         self.y[idx[going], :self.D] += step[going]
         self._finish(idx[failed])
         c = idx[converged]
         self.fine[c] = m[converged]
-        self.errors[c] = halving_error(self.metrics[c], m[converged])
-        # the accuracy target: solve again at the step the fourth order asks for
+        self.errors[c] = change[converged]
+        # the accuracy target: solve again at the step the fourth order asks for, or at
+        # twice the steps after a re-solve whose estimate fell slower than SLOW_ORDER
         target = self.accuracy[c]
         want = np.ceil(self.steps[c] * (self.errors[c] / target) ** 0.25 * 1.1 / 16) * 16
+        before, error = self.coarser[c].T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            order = np.log(error / self.errors[c]) / np.log(self.steps[c] / before)
+        slow = (self.refine[c] > 0) & ~(order >= SLOW_ORDER)
+        want = np.where(slow, 2 * self.steps[c], want)
         again = (np.isfinite(target) & (self.errors[c] > target) & (self.refine[c] < REFINEMENTS)
                  & (want <= self.max_steps[c]))
         r = c[again]
+        self.coarser[r] = np.stack([self.steps[r], self.errors[r]], axis=1)
         self.steps[r] = np.maximum(want[again], self.steps[r] + 16)
         self.refine[r] += 1
         self.phase[r] = _NEWTON
