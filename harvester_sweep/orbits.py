@@ -602,12 +602,13 @@ class _Points:
         stalled = ~converged & ~diverged & (
             ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
             | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
-        # in a re-solve at a finer step, an iterate that stalls within a quarter of the
-        # accuracy target of its orbit is taken: where the map jumps near Newton's floor
-        # (by about its own error where a switch crosses a step's end) the iterates stall
-        # short of it, and the re-solve kept the coarser orbit, above the target; the error
-        # estimate that follows measures the orbit as taken
-        enough = stalled & good & (self.refine[idx] > 0) & (size <= 0.25 * self.accuracy[idx])
+        # in a re-solve at a finer step, an iterate that stalls within half the accuracy
+        # target of its orbit is taken (its metrics then within about the target, power
+        # being a square): where the map jumps near Newton's floor (by about its own error
+        # where a switch crosses a step's end) the iterates stall short of it, and the
+        # re-solve kept the coarser orbit, above the target; the error estimate that
+        # follows measures the orbit as taken
+        enough = stalled & good & (self.refine[idx] > 0) & (size <= 0.5 * self.accuracy[idx])
         converged |= enough
         stalled &= ~enough
         # a chord step that stalls, or that touched a stop with the monodromy of an affine
