@@ -29,7 +29,8 @@ peak voltage, lam by the range), and the arclength is measured in them.
   stop; a moving stop's grazing is not watched) and ``-lower_gap - x_min``. Each is located
   by the Illinois method on the arclength between the two points, every trial point
   corrected onto the branch, until the bracket bounds the parameter to ``LOCATE``
-  relative; the located point joins the branch with its flag.
+  relative; the located point joins the branch with its flag. Where a correction inside
+  the bracket fails, the end of the step is flagged, the step its bracket.
 - **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
   from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
   the period-p orbit along the eigenvector of the multiplier -1.
@@ -45,7 +46,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -456,11 +457,13 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
             if tests_a[k] * tests_b[k] < 0:
                 found = _locate(problem, a, b, ds, lambda pt, k=k: problem.tests(pt)[k],
                                 tests_a[k], tests_b[k])
-                if found is not None:
-                    s, point = found
-                    point.bifurcation = list(BIFURCATIONS).index(kind)
-                    point.arclength = a.arclength + s
-                    located.append((s, point))
+                if found is None:  # (a correction inside failed: flagged at the step's
+                    # end, the whole step its bracket, rather than lost)
+                    found = ds, replace(b, precision=problem.range * ds)
+                s, point = found
+                point.bifurcation = list(BIFURCATIONS).index(kind)
+                point.arclength = a.arclength + s
+                located.append((s, point))
         lam = problem.lam(b.z)
         beyond = lam < problem.lo or lam > problem.hi
         if beyond:  # the branch's end: the point where it leaves the range

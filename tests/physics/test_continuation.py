@@ -20,7 +20,7 @@ import pytest
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from harvester_sweep import continue_branch, resolve_parameters, run_sweep
+from harvester_sweep import continuation, continue_branch, resolve_parameters, run_sweep
 from harvester_sweep.outputs import BIFURCATIONS
 from tests.helpers import period_map_jacobian, phasor
 
@@ -189,3 +189,18 @@ def test_located_folds_have_a_multiplier_one_in_the_reference(s_curve):
                   + 1j * point["floquet_multipliers_imag"].values)
         for mu in engine:
             assert np.min(np.abs(reference - mu)) < 1e-3, (engine, reference)
+
+
+def test_a_bifurcation_not_located_is_flagged_with_its_step(s_curve, monkeypatch):
+    """Where a correction inside the bracket fails, the sign change is still flagged, at
+    the step's end with the step as its bracket: with every location failing, the branch
+    has the same folds and grazing, each bracket holding the located value."""
+    monkeypatch.setattr(continuation, "_locate", lambda *args: None)
+    rough = continue_branch("paper", "frequency", 300.0, 200.0, gap=GAP)
+    for kind in (FOLD, GRAZING):
+        flagged = rough.isel(point=rough["bifurcation"].values == kind)
+        exact = located(s_curve, kind)
+        assert len(flagged["frequency"]) == len(exact)
+        for f, width, value in zip(flagged["frequency"].values,
+                                   flagged["frequency_precision"].values, exact):
+            assert 0 < abs(f - value) <= width, (kind, f, width, value)
