@@ -31,7 +31,6 @@ from harvester_sweep.outputs import BIFURCATIONS
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "benchmarks" / "results" / "s_curve.md"
 START, STOP, GAP = 150.0, 300.0, 1e-6
-SETTLED = STATUS.settled
 
 
 def main() -> None:
@@ -89,7 +88,7 @@ def main() -> None:
                                         ("down", low, (210.0, 230.0))):
             x = ds["x_max"].sel(direction=direction).values
             # (a point that did not settle is on neither branch: it is listed, not counted)
-            settled = ds["status"].sel(direction=direction).values == SETTLED
+            settled = ds["status"].sel(direction=direction).values == STATUS.settled
             near = (f > window[0]) & (f < window[1])
             inside = np.flatnonzero(near & settled)
             jump = np.flatnonzero(np.diff(x[inside] > 1.1 * GAP))
