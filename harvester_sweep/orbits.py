@@ -264,11 +264,11 @@ def on_its_way(t0, t1, q, y, jac, scale, floor):
         predicted = np.where((k < q)[:, None], np.einsum("nij,nj->ni", jac, predicted),
                              predicted)
     linear = _norm(t1 - y - predicted, scale) <= LINEAR_REGIME * d1 + floor
-    stays = d1 <= NEAR
-    ahead = t1 - y
-    for _ in range(AHEAD):
-        ahead = np.einsum("nij,nj->ni", jac, ahead)
-        stays &= _norm(ahead, scale) <= NEAR
+    ahead = np.empty((AHEAD,) + y.shape)
+    ahead[0] = np.einsum("nij,nj->ni", jac, t1 - y)
+    for k in range(1, AHEAD):
+        ahead[k] = np.einsum("nij,nj->ni", jac, ahead[k - 1])
+    stays = (d1 <= NEAR) & np.all(_norm(ahead, scale) <= NEAR, axis=0)
     way = (d0 <= NEAR) & linear & stays & (d0 > floor)
     return (d0 <= floor) | way
 
@@ -447,8 +447,9 @@ class _Points:
         returns the number of points that finished."""
         iterate = self.phase == _NEWTON
         copied = iterate & ~self.chord  # with the copies of the monodromy
-        blocks = [(np.flatnonzero(copied & ~self.central), self.D + 1),  # forward
-                  (np.flatnonzero(copied & self.central), 2 * self.D + 1)]  # central
+        central = np.flatnonzero(copied & self.central)
+        blocks = [(b, w) for b, w in [(np.flatnonzero(copied & ~self.central), self.D + 1),
+                                      (central, 2 * self.D + 1)] if b.size]
         chord = np.flatnonzero(iterate & self.chord)
         transient = np.flatnonzero(self.phase == _TRANSIENT)
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
@@ -491,8 +492,8 @@ class _Points:
         # times off. In a first solve a step that does not contract ends the attempt, as it
         # did: there it also turns away orbits the motion does not reach, one of the 1e6
         # sweep's among them, which the motion passes within 0.025 of)
-        self.central[blocks[1][0]] = False
-        resolved = blocks[1][0][self.refine[blocks[1][0]] > 0]
+        self.central[central] = False
+        resolved = central[self.refine[central] > 0]
         self.last[resolved] = np.inf
         c = slice(k, k + len(chord))
         chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)

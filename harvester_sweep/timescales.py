@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import math
+import operator
 from dataclasses import dataclass
 
 from .contact import contact_damping_of, lower_stop
@@ -65,27 +66,45 @@ class TimeScales:
 
 
 #: Parameters chosen from the time scales, which they do not depend on: left out of the
-#: key under which the time scales are remembered.
+#: key under which what is derived from them is remembered.
 CHOSEN = frozenset({"steps_per_period", "max_periods"})
+_READERS: dict = {}  # a parameter set's names -> what reads the key's values from it
 
 
+def _key(p: dict) -> tuple:
+    """The key under which what is derived from parameter set ``p`` is remembered: its
+    names, and its values but those CHOSEN."""
+    names = tuple(p)
+    read = _READERS.get(names)
+    if read is None:
+        kept = [name for name in names if name not in CHOSEN]
+        read = _READERS[names] = (lambda q: (q[kept[0]],)) if len(kept) == 1 \
+            else operator.itemgetter(*kept)
+    return names, read(p)
+
+
+def _remembered(derive):
+    """``derive(p)`` remembered under _key(p): a point is resolved (its step chosen), then
+    packed (its step checked against that choice), each asking, and a chunk of a sweep
+    holds 4096 points. Derived afresh where a value is unhashable."""
+    @functools.lru_cache(maxsize=8192)
+    def by_key(key):
+        names, values = key
+        return derive(dict(zip([name for name in names if name not in CHOSEN], values)))
+
+    @functools.wraps(derive)
+    def remembered(p):
+        try:
+            return by_key(_key(p))
+        except TypeError:  # an unhashable value
+            return derive(p)
+
+    return remembered
+
+
+@_remembered
 def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
-    try:
-        return _remembered(tuple(item for item in p.items() if item[0] not in CHOSEN))
-    except TypeError:  # an unhashable value
-        return _time_scales(p)
-
-
-@functools.lru_cache(maxsize=8192)
-def _remembered(items: tuple) -> TimeScales:
-    """time_scales of the parameter set ``items``, remembered: a point is resolved (its
-    step chosen), then packed (its step checked against that choice), each asking for
-    them (a chunk of a sweep holds 4096 points)."""
-    return _time_scales(dict(items))
-
-
-def _time_scales(p: dict) -> TimeScales:
     m = p["mass"]
     wn = 2 * math.pi * p["natural_frequency"]
     w = 2 * math.pi * p["frequency"]
@@ -130,6 +149,7 @@ def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     return math.sqrt(1.5 * kh * math.sqrt(delta) / m), kh * delta**1.5 * ch / m, delta
 
 
+@_remembered
 def auto_steps_per_period(p: dict) -> int:
     """Steps per forcing period for the accuracy target ``p["accuracy"]``, within stability.
 
@@ -145,6 +165,7 @@ def auto_steps_per_period(p: dict) -> int:
     return max(64, 16 * math.ceil(steps / 16))
 
 
+@_remembered
 def stability_steps(p: dict) -> tuple[int, str]:
     """Fewest steps per period inside RK4's stability bound, and the rate that sets it."""
     rate, what = time_scales(p).fastest()
@@ -175,6 +196,7 @@ def slowest_decay(p: dict) -> tuple[float, str]:
     return rates[what], what
 
 
+@_remembered
 def auto_max_periods(p: dict) -> int:
     """Budget of forcing periods: the slowest transient decays by the settle tolerance, with
     a margin; at least 1000 and at most 1e6."""
