@@ -316,7 +316,11 @@ def monodromy(ends, scale):
 
 def sorted_multipliers(jacobians):
     """Floquet multipliers (n, 3) of monodromy matrices (n, 3, 3), largest modulus first."""
-    mult = np.linalg.eigvals(jacobians)
+    return _by_modulus(np.linalg.eigvals(jacobians))
+
+
+def _by_modulus(mult):
+    """Multipliers (n, k), each row sorted largest modulus first."""
     order = np.argsort(-np.abs(mult), axis=-1, kind="stable")
     return np.take_along_axis(mult, order, axis=-1)
 
@@ -358,6 +362,7 @@ class _Points:
         self.scale = np.ones((n, self.D))
         self.scale[:] = self._linear_scale()
         self.jacobian = np.full((n, self.D, self.D), np.nan)
+        self.multipliers = np.full((n, self.D), np.nan + 0j)  # of the orbit taken
         self.first_jacobian = np.full((n, self.D, self.D), np.nan)  # at each attempt's start
         self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
         self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
@@ -701,7 +706,11 @@ class _Points:
         free |= linear
         proved |= linear
         q = np.maximum(self.t1_periods[idx] // p, 1)  # (maps of p periods from t0 to t1)
-        on_way = on_its_way(self.t0[idx], self.t1[idx], q, y, jac, scale, floor)
+        on_way = np.zeros(len(idx), bool)  # (asked where the orbit has contact)
+        w = ~free
+        if w.any():
+            on_way[w] = on_its_way(self.t0[idx[w]], self.t1[idx[w]], q[w], y[w], jac[w],
+                                   scale[w], floor[w])
         taken = refining | stable & np.where(free, proved, on_way)
         t = idx[taken]
         self.metrics[t] = m[taken]
@@ -710,6 +719,7 @@ class _Points:
         self.finals[t, self.D:] = centre[taken, self.D:]
         self.y[t] = self.finals[t]
         self.jacobian[t] = jac[taken]
+        self.multipliers[t] = _by_modulus(mult[taken])
         self.orbit_steps[t] = self.steps[t]
         self.floor[t] = floor[taken]
         self.status[t] = STATUS.settled
@@ -737,6 +747,8 @@ class _Points:
         self.status[tested] = STATUS.settled
         self.finals[tested] = self.traj[tested]
         self.jacobian[tested] = self.first_jacobian[tested]
+        if tested.size:
+            self.multipliers[tested] = sorted_multipliers(self.jacobian[tested])
         self._release(tested)
         self._finish(tested)  # (not estimated: the orbit is not a fixed point to Newton)
         idx = idx[~self.tested[idx]]
@@ -887,7 +899,7 @@ class _Points:
         metrics[:, METRIC.periods_run] = self.run
         multipliers = np.full((n, self.D), np.nan + 0j)
         if settled.any():
-            multipliers[settled] = sorted_multipliers(self.jacobian[settled])
+            multipliers[settled] = self.multipliers[settled]
         strobes = np.full((n, samples, self.D), np.nan)
         age = np.arange(samples)[::-1]  # periods before the end
         # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
