@@ -77,9 +77,7 @@ def _key(p: dict) -> tuple:
     names = tuple(p)
     read = _READERS.get(names)
     if read is None:
-        kept = [name for name in names if name not in CHOSEN]
-        read = _READERS[names] = (lambda q: (q[kept[0]],)) if len(kept) == 1 \
-            else operator.itemgetter(*kept)
+        read = _READERS[names] = operator.itemgetter(*(n for n in names if n not in CHOSEN))
     return names, read(p)
 
 
