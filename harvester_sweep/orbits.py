@@ -98,6 +98,14 @@ EXPANDING = 1.0
 #: near; at 1e-3 it cost a third of the motion of the sweeps' points with contact and took
 #: no other attractor on the benchmark grids (docs/numerics.md) [-].
 NEAR = 0.1
+#: ... and an attempt's iterates whose orbit has contact end once Newton is within this
+#: of it (relative to the scales, each step at most half the last) and it lies beyond
+#: NEAR of the motion's state at the attempt's start, by more than the step: that orbit
+#: could not be taken. A first run that does not touch (a contact the motion makes only now
+#: and then) takes the iterates through the contact-free map's fixed point to such orbits:
+#: they converged to them, six runs an attempt, again at every attempt of a motion that
+#: never settles (docs/numerics.md) [-].
+SETTLING = 1e-2
 #: Maps of p periods the monodromy's prediction is followed to see that it stays NEAR [-].
 AHEAD = 16
 #: Steps per period of the linear motion that guesses whether a motion no run has taken
@@ -600,6 +608,19 @@ class _Points:
         if looked.any():
             radius[looked] = np.max(np.abs(np.linalg.eigvals(jac[looked])), axis=1)
         far = looked & ((distance > NEAR) | (radius > EXPANDING))
+        # a later iterate of an attempt from the motion, whose run touched a stop, is given
+        # up when Newton has come within SETTLING of an orbit beyond NEAR of the motion's
+        # state at the attempt's start (on_its_way takes an orbit with contact from within
+        # NEAR of it; the steps left add up to about this one)
+        later = ~opening & ~trajectory & good & touched & ~converged \
+            & (self.refine[idx] == 0) & (size <= SETTLING) & (size <= 0.5 * self.last[idx])
+        if later.any():
+            d0 = _norm(self.t0[idx] - (y + step), scale)
+            away = later & (d0 - size > NEAR)
+            if away.any():
+                radius[away] = np.max(np.abs(np.linalg.eigvals(jac[away])), axis=1)
+                distance = np.where(away, d0, distance)
+                far |= away
         if far.any():
             radius = radius[far]
             need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * distance[far]))
