@@ -53,8 +53,8 @@ import numpy as np
 from . import _engine
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, NO_STOP, PARAM, STATUS
 from .linear import linear_response
-from .orbits import (PERTURBATION, ROUNDING, halving_error, monodromy, orbit_scales,
-                     perturbed_copies, state_size)
+from .orbits import (PERTURBATION, ROUNDING, copies_width, halving_error, monodromy,
+                     orbit_scales, perturbed_copies, state_size)
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PARAMETERS, ParameterError, check_names, resolve_parameters
@@ -159,10 +159,11 @@ class _Problem:
         given, (1, p, 3) receives the states y(T) .. y(pT) of the unperturbed run."""
         lam = self.lam(z)
         dlam = PERTURBATION * self.range
+        width = copies_width("spread", self.D) if jacobian else 1  # (lanes at lam)
         try:
-            rows = [self.row(lam, steps)]
+            rows = [self.row(lam, steps)] * width
             if jacobian:
-                rows = rows * (4 * self.D + 1) + [self.row(lam + dlam, steps)]
+                rows += [self.row(lam + dlam, steps)]
         except ParameterError:
             return None
         rows = np.array(rows)
@@ -170,7 +171,7 @@ class _Problem:
         rows[1:, PARAM.book] = 0.0  # (the perturbed runs' end states alone are read)
         state = carry.copy()
         state[:self.D] = z[:self.D] * self.scale
-        states = perturbed_copies(state[None, :], self.scale[None, :], spread=True) \
+        states = perturbed_copies(state[None, :], self.scale[None, :], "spread") \
             if jacobian else state[None, :]
         states = np.concatenate([states, states[:1]])[:len(rows)]  # (the lane at lam + dlam)
         metrics = np.empty((len(rows), len(METRIC)))
@@ -184,7 +185,7 @@ class _Problem:
             return None
         if not jacobian:
             return states[0], metrics[0], None, None
-        m = monodromy(states[None, :4 * self.D + 1], self.scale[None, :])[0]
+        m = monodromy(states[None, :width], self.scale[None, :])[0]
         scaled = np.empty((self.D, self.D + 1))
         scaled[:, :self.D] = m * self.scale[None, :] / self.scale[:, None] - np.eye(self.D)
         scaled[:, self.D] = ((states[-1, :self.D] - states[0, :self.D]) / dlam

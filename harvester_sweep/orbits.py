@@ -281,18 +281,27 @@ def on_its_way(t0, t1, q, y, jac, scale, floor):
     return (d0 <= floor) | way
 
 
-def perturbed_copies(states, scale, central=False, spread=False):
-    """Each state (n, len(STATE)) and D copies moved by PERTURBATION of ``scale`` (n, D)
-    along each of its first D components: (n * (D + 1), len(STATE)); with ``central``, 2 D
-    copies moved by CENTRAL, the D moved the other way after the others:
-    (n * (2 D + 1), len(STATE)); with ``spread``, 2 D more after those, moved by twice
-    CENTRAL each way: (n * (4 D + 1), len(STATE)); the copies of a state after it
+#: The perturbed copies of a monodromy, by kind: each component's moves, relative to its
+#: scale, in the order the copies follow their state: forward differences, central ones,
+#: and the spread copies whose median slope steps over a jump of the map (monodromy) [-].
+COPIES = {"forward": (PERTURBATION,), "central": (CENTRAL, -CENTRAL),
+          "spread": (CENTRAL, -CENTRAL, 2 * CENTRAL, -2 * CENTRAL)}
+
+
+def copies_width(kind, D):
+    """Lanes of a state and its perturbed copies of ``kind`` (COPIES) in D components."""
+    return 1 + D * len(COPIES[kind])
+
+
+def perturbed_copies(states, scale, kind="forward"):
+    """Each state (n, len(STATE)) followed by its copies of ``kind`` (COPIES), each moved
+    along one of its first D components by a move times ``scale`` (n, D), the D
+    components in turn for each move: (n * copies_width(kind, D), len(STATE))
     (D = scale.shape[1])."""
     D = scale.shape[1]
     n = len(states)
-    moves = [PERTURBATION] if not (central or spread) \
-        else [CENTRAL, -CENTRAL] + ([2 * CENTRAL, -2 * CENTRAL] if spread else [])
-    width = 1 + D * len(moves)
+    moves = COPIES[kind]
+    width = copies_width(kind, D)
     out = np.repeat(states, width, axis=0).reshape(n, width, states.shape[1])
     for k, move in enumerate(moves):
         for c in range(D):
@@ -301,13 +310,13 @@ def perturbed_copies(states, scale, central=False, spread=False):
 
 
 def monodromy(ends, scale):
-    """The monodromy matrices (n, D, D) from the end states (n, D + 1 | 2 D + 1 | 4 D + 1,
-    >= D) of the runs of :func:`perturbed_copies` with the same ``scale`` (n, D): by
-    forward differences, by central ones, or (spread) by the median of the four slopes
-    between the five states along each component."""
+    """The monodromy matrices (n, D, D) from the end states (n, width, >= D) of the runs
+    of :func:`perturbed_copies` with the same ``scale`` (n, D), the kind of copies told by
+    their width: by forward differences, by central ones, or (spread) by the median of the
+    four slopes between the five states along each component."""
     D = scale.shape[-1]
     e = ends[..., :D]
-    if e.shape[1] == 4 * D + 1:
+    if e.shape[1] == copies_width("spread", D):
         # The RK4 map with located switches jumps by about its own error where a switch
         # crosses a step's end: a slope across such a jump is far off, the other three
         # are near the derivative (the median, to the first order in the step)
@@ -315,7 +324,7 @@ def monodromy(ends, scale):
                e[:, 1:D + 1], e[:, 2 * D + 1:3 * D + 1]]  # at -2h, -h, 0, h, 2h
         slopes = np.sort(np.diff(np.stack(row), axis=0), axis=0)
         diff, h = (slopes[1] + slopes[2]) / 2, CENTRAL * scale
-    elif e.shape[1] == 2 * D + 1:
+    elif e.shape[1] == copies_width("central", D):
         diff, h = (e[:, 1:D + 1] - e[:, D + 1:]) / 2, CENTRAL * scale
     else:
         diff, h = e[:, 1:] - e[:, :1], PERTURBATION * scale
@@ -461,23 +470,24 @@ class _Points:
         iterate = self.phase == _NEWTON
         copied = iterate & ~self.chord  # with the copies of the monodromy
         central = np.flatnonzero(copied & self.central)
-        blocks = [(b, w) for b, w in [(np.flatnonzero(copied & ~self.central), self.D + 1),
-                                      (central, 2 * self.D + 1)] if b.size]
+        blocks = [(b, kind, copies_width(kind, self.D))
+                  for b, kind in [(np.flatnonzero(copied & ~self.central), "forward"),
+                                  (central, "central")] if b.size]
         chord = np.flatnonzero(iterate & self.chord)
         transient = np.flatnonzero(self.phase == _TRANSIENT)
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
-        owners = np.concatenate([np.repeat(b, w) for b, w in blocks]
+        owners = np.concatenate([np.repeat(b, w) for b, _, w in blocks]
                                 + [chord, transient, estimate])
         rows = self.rows[owners].copy()
-        states = np.concatenate([perturbed_copies(self.y[b], self.scale[b], w > self.D + 1)
-                                 for b, w in blocks]
+        states = np.concatenate([perturbed_copies(self.y[b], self.scale[b], kind)
+                                 for b, kind, _ in blocks]
                                 + [self.y[chord], self.traj[transient], self.y[estimate]])
         rows[:, PARAM.steps] = self.steps[owners]
         rows[:, PARAM.max_periods] = self.p[owners]
-        k = sum(len(b) * w for b, w in blocks)
+        k = sum(len(b) * w for b, _, w in blocks)
         copies = np.arange(len(owners)) < k
         start = 0
-        for b, w in blocks:
+        for b, _, w in blocks:
             copies[start:start + len(b) * w:w] = False
             start += len(b) * w
         rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
@@ -495,10 +505,10 @@ class _Points:
         np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
         before = int((self.phase == _DONE).sum())
         runs, start = [], 0
-        for b, w in blocks:
+        for b, kind, w in blocks:
             runs.append(self._copies(b, metrics[start:start + len(b) * w],
                                      states[start:start + len(b) * w],
-                                     strobes[start:start + len(b) * w:w], w))
+                                     strobes[start:start + len(b) * w:w], kind, w))
             start += len(b) * w
         # (in a re-solve at a finer step, a step by central differences is not compared
         # with the last one, by forward differences: near grazing that one can be several
@@ -511,7 +521,7 @@ class _Points:
         c = slice(k, k + len(chord))
         chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)
         runs.append((metrics[c], states[c], strobes[c], self.newton_jacobian[chord], chord_ok))
-        self._after_newton(np.concatenate([b for b, _ in blocks] + [chord]),
+        self._after_newton(np.concatenate([b for b, _, _ in blocks] + [chord]),
                            *(np.concatenate(parts) for parts in zip(*runs)))
         j = slice(k + len(chord), k + len(chord) + len(transient))
         self._after_transient(transient, metrics[j], states[j], strobes[j])
@@ -519,8 +529,9 @@ class _Points:
         self._after_estimate(estimate, metrics[j], states[j])
         return int((self.phase == _DONE).sum()) - before
 
-    def _copies(self, idx, metrics, states, strobes, width):
-        """The runs of points ``idx`` with their perturbed copies, ``width`` lanes each
+    def _copies(self, idx, metrics, states, strobes, kind, width):
+        """The runs of points ``idx`` with their perturbed copies of ``kind``, ``width``
+        lanes each
         (metrics and end states of every lane, strobes of the centre lanes): the centre
         lanes' metrics, end states and strobes, the monodromy, and whether every lane ran
         sane and finite."""
@@ -533,7 +544,7 @@ class _Points:
             ((r[..., PARAM.khm] == 0) | (m[:, 1:, METRIC.impacts_per_period] == 0))
             & ((r[..., PARAM.lower_khm] == 0) | (m[:, 1:, METRIC.impacts_per_period_lower] == 0)),
             axis=1)
-        self.exact[idx] = self.affine[idx] | (width > self.D + 1)
+        self.exact[idx] = self.affine[idx] | (kind != "forward")
         return m[:, 0], f[:, 0], strobes, monodromy(f, self.scale[idx]), ok
 
     # -- Newton ------------------------------------------------------------------------
@@ -975,5 +986,5 @@ def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
     ])
 
 
-__all__ = ["Orbits", "halving_error", "monodromy", "on_its_way", "orbit_scales",
-           "perturbed_copies", "solve_orbits", "sorted_multipliers"]
+__all__ = ["COPIES", "Orbits", "copies_width", "halving_error", "monodromy", "on_its_way",
+           "orbit_scales", "perturbed_copies", "solve_orbits", "sorted_multipliers"]

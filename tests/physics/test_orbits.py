@@ -102,7 +102,7 @@ def test_spread_differences_step_over_a_jump_of_the_map():
 
     def error(spread):
         """The monodromy's largest error, in scaled components."""
-        states = orbits.perturbed_copies(y0, scale, central=True, spread=spread)
+        states = orbits.perturbed_copies(y0, scale, "spread" if spread else "central")
         z = states[:, :3] / scale
         jump = (z[:, 0] > z0[0] + 0.5 * orbits.CENTRAL) * 1e-6
         states[:, :3] = (z @ a.T + 0.01 * z[:, :1] ** 2 + jump[:, None]) * scale
