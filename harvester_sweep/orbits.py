@@ -333,11 +333,7 @@ def monodromy(ends, scale):
 
 def sorted_multipliers(jacobians):
     """Floquet multipliers (n, 3) of monodromy matrices (n, 3, 3), largest modulus first."""
-    return _by_modulus(np.linalg.eigvals(jacobians))
-
-
-def _by_modulus(mult):
-    """Multipliers (n, k), each row sorted largest modulus first."""
+    mult = np.linalg.eigvals(jacobians)
     order = np.argsort(-np.abs(mult), axis=-1, kind="stable")
     return np.take_along_axis(mult, order, axis=-1)
 
@@ -379,7 +375,6 @@ class _Points:
         self.scale = np.ones((n, self.D))
         self.scale[:] = self._linear_scale()
         self.jacobian = np.full((n, self.D, self.D), np.nan)
-        self.multipliers = np.full((n, self.D), np.nan + 0j)  # of the orbit taken
         self.first_jacobian = np.full((n, self.D, self.D), np.nan)  # at each attempt's start
         self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
         self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
@@ -751,7 +746,6 @@ class _Points:
         self.finals[t, self.D:] = centre[taken, self.D:]
         self.y[t] = self.finals[t]
         self.jacobian[t] = jac[taken]
-        self.multipliers[t] = _by_modulus(mult[taken])
         self.orbit_steps[t] = self.steps[t]
         self.floor[t] = floor[taken]
         self.status[t] = STATUS.settled
@@ -779,8 +773,6 @@ class _Points:
         self.status[tested] = STATUS.settled
         self.finals[tested] = self.traj[tested]
         self.jacobian[tested] = self.first_jacobian[tested]
-        if tested.size:
-            self.multipliers[tested] = sorted_multipliers(self.jacobian[tested])
         self._release(tested)
         self._finish(tested)  # (not estimated: the orbit is not a fixed point to Newton)
         idx = idx[~self.tested[idx]]
@@ -931,7 +923,7 @@ class _Points:
         metrics[:, METRIC.periods_run] = self.run
         multipliers = np.full((n, self.D), np.nan + 0j)
         if settled.any():
-            multipliers[settled] = self.multipliers[settled]
+            multipliers[settled] = sorted_multipliers(self.jacobian[settled])
         strobes = np.full((n, samples, self.D), np.nan)
         age = np.arange(samples)[::-1]  # periods before the end
         # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
