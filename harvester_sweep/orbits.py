@@ -106,6 +106,8 @@ NEAR = 0.1
 #: they converged to them, six runs an attempt, again at every attempt of a motion that
 #: never settles (docs/numerics.md) [-].
 SETTLING = 1e-2
+#: ... and within this share of the orbit's margin from grazing a stop (reach) [-].
+GRAZING = 1.0
 #: Maps of p periods the monodromy's prediction is followed to see that it stays NEAR [-].
 AHEAD = 16
 #: Steps per period of the linear motion that guesses whether a motion no run has taken
@@ -254,16 +256,17 @@ def reaches_a_stop(rows, high, low):
         | (rows[:, PARAM.lower_khm] > 0) & ~(low > -rows[:, PARAM.lower_gap])
 
 
-def on_its_way(t0, t1, q, y, jac, scale, floor):
+def on_its_way(t0, t1, q, y, jac, scale, floor, near=NEAR):
     """Whether motions at ``t0`` (n, D), ``q`` (n,) maps of the period map later at ``t1``,
     are on their way to its fixed points ``y`` (n, D) of monodromy ``jac`` (n, D, D), in
     components relative to ``scale`` (n, D), with Newton's floor ``floor`` (n,) [-].
 
-    Yes where ``t0`` is on the fixed point (within the floor), or where it is within NEAR
-    of it, the monodromy predicts ``t1 - y`` from ``t0 - y`` to LINEAR_REGIME of its size,
-    and the prediction from ``t1`` for AHEAD more maps stays within NEAR, where the linear
-    regime was seen to hold. (A motion may first move away from a stable orbit, as one of
-    a non-normal monodromy does: on its way too, if it stays near.)
+    Yes where ``t0`` is on the fixed point (within the floor), or where it is within
+    ``near`` (n,) of it (NEAR, or nearer: :func:`reach`), the monodromy predicts ``t1 - y``
+    from ``t0 - y`` to LINEAR_REGIME of its size, and the prediction from ``t1`` for AHEAD
+    more maps stays within NEAR, where the linear regime was seen to hold. (A motion may
+    first move away from a stable orbit, as one of a non-normal monodromy does: on its way
+    too, if it stays near.)
     """
     d0 = _norm(t0 - y, scale)
     d1 = _norm(t1 - y, scale)
@@ -277,8 +280,26 @@ def on_its_way(t0, t1, q, y, jac, scale, floor):
     for k in range(1, AHEAD):
         ahead[k] = np.einsum("nij,nj->ni", jac, ahead[k - 1])
     stays = (d1 <= NEAR) & np.all(_norm(ahead, scale) <= NEAR, axis=0)
-    way = (d0 <= NEAR) & linear & stays & (d0 > floor)
+    way = (d0 <= near) & linear & stays & (d0 > floor)
     return (d0 <= floor) | way
+
+
+def reach(m, scale):
+    """How near a motion must come to orbits of metric rows ``m`` (n, len(METRIC)) to be
+    in their linear regime, relative to the component scales ``scale`` (n, D) [-]: NEAR,
+    or nearer an orbit that comes near grazing a stop (GRAZING times the margin).
+
+    The period map is smooth only as long as the motion makes the orbit's contacts and no
+    other: a motion farther from the orbit than the top of one of its swings is from the
+    stop (``near_miss``) may touch where it does not, and one farther than the overshoot
+    its slowest impact would carry a harmonic swing beyond the gap, 0.5 (v_imp / (w x))^2
+    of the amplitude x (``approach_velocity_min``), may miss that impact. A stable orbit
+    that grazes is then the attractor of no motion beyond that margin."""
+    with np.errstate(invalid="ignore"):
+        miss = m[:, METRIC.near_miss] / scale[:, 0]
+        overshoot = 0.5 * (m[:, METRIC.approach_velocity_min] / scale[:, 1]) ** 2
+    margin = np.fmin(miss, overshoot)
+    return np.where(margin >= 0, np.minimum(GRAZING * margin, NEAR), NEAR)
 
 
 #: The perturbed copies of a monodromy, by kind: each component's moves, relative to its
@@ -735,9 +756,11 @@ class _Points:
         q = np.maximum(self.t1_periods[idx] // p, 1)  # (maps of p periods from t0 to t1)
         on_way = np.zeros(len(idx), bool)  # (asked where the orbit has contact)
         w = ~free
+        near = np.full(len(idx), NEAR)
         if w.any():
+            near[w] = reach(m[w], scale[w])
             on_way[w] = on_its_way(self.t0[idx[w]], self.t1[idx[w]], q[w], y[w], jac[w],
-                                   scale[w], floor[w])
+                                   scale[w], floor[w], near[w])
         taken = refining | stable & np.where(free, proved, on_way)
         t = idx[taken]
         self.metrics[t] = m[taken]
@@ -753,12 +776,12 @@ class _Points:
         est = t[self.estimated[t]]
         self._estimate(est)
         self._finish(t[~self.estimated[t]])
-        # not taken: integrate on for about the periods the motion needs to come NEAR
+        # not taken: integrate on for about the periods the motion needs to come near
         d0 = _norm(e, scale)
         with np.errstate(divide="ignore"):  # (d0 = 0: no hint, below)
-            hint = np.ceil(p[~taken] * np.log(NEAR / (2 * d0[~taken]))
+            hint = np.ceil(p[~taken] * np.log(near[~taken] / (2 * d0[~taken]))
                            / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
-        self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > NEAR), hint, 0)
+        self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > near[~taken]), hint, 0)
         self._give_up(idx[~taken])
 
     def _give_up(self, idx):
@@ -979,4 +1002,4 @@ def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["COPIES", "Orbits", "copies_width", "halving_error", "monodromy", "on_its_way",
-           "orbit_scales", "perturbed_copies", "solve_orbits", "sorted_multipliers"]
+           "orbit_scales", "perturbed_copies", "reach", "solve_orbits", "sorted_multipliers"]

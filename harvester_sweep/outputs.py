@@ -133,6 +133,13 @@ _OUTPUTS = (
            "contact force over the orbit: largest minus smallest peak",
            comment="0 without impacts; NaN where no contact lasted three steps (no peak "
                    "located)"),
+    Output("near_miss", "m", "smallest distance by which the top of one of the orbit's swings "
+           "stays short of a rigid stop: the gap less the largest x of a swing that does not "
+           "touch (0 at a grazing)",
+           comment="NaN where every swing touches, or without a rigid stop"),
+    Output("approach_velocity_min", "m/s", "smallest tip velocity relative to the stop at "
+           "the first touch of an impact over the orbit, either stop (0 at a grazing)",
+           comment="NaN when the orbit has no impact on either stop"),
     Output("orbit_period", "1", "forcing periods per orbit (0 when not settled)", "int32"),
     Output("status", "1", "outcome of the run", "int8",
            comment="; ".join(f"{s.code} {s.name}: {s.meaning}" for s in STATUSES)),

@@ -134,6 +134,7 @@ def reference_orbit(result, periods_to_settle=40, method="DOP853", rtol=1e-12):
         "x_min": samples[0].min(),
         "contact_force_max": force.max(),
         "approach_velocity": float(np.mean(ref.onset_velocities)),
+        "approach_velocity_min": float(np.min(ref.onset_velocities)),
         "impacts_per_period": len(ref.onset_velocities),
     }
 

@@ -167,6 +167,7 @@ def _start_period(L, j, it):
                            * L[LANE.kh + j], L[LANE.gap + j], L[LANE.ch + j])
     L[LANE.stop_x_max + j] = abs(xs)
     L[LANE.fc_peak_min + j], L[LANE.fc_peak_max + j] = np.inf, -np.inf
+    L[LANE.near_miss + j], L[LANE.vimp_min + j] = np.inf, np.inf
     L[LANE.q + j] = 0.0
     L[LANE.x_max + j], L[LANE.x_min + j], L[LANE.v_max + j], L[LANE.v_peak + j] = (
         x,
@@ -595,7 +596,7 @@ def _finish_rigid(L, j):
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
     booking.extrema(L, j, x, v, V, dV, xn, vn, Vn, voltage_rate(Vn, vn, irc, thc), h, fcp, fc,
-                    fcn, L[LANE.sign + j] > 0.0)
+                    fcn, L[LANE.sign + j] > 0.0, g if khm > 0.0 else np.inf)
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
     L[LANE.fc_previous + j], L[LANE.fc + j] = fc, fcn
     L[LANE.on + j], L[LANE.ch + j], L[LANE.fine + j] = on, ch, fine
@@ -653,6 +654,8 @@ def end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
     acc[slot, ACC.stop_x_max] = L[LANE.stop_x_max + j]
     acc[slot, ACC.fc_peak_min] = L[LANE.fc_peak_min + j]
     acc[slot, ACC.fc_peak_max] = L[LANE.fc_peak_max + j]
+    acc[slot, ACC.near_miss] = L[LANE.near_miss + j]
+    acc[slot, ACC.vimp_min] = L[LANE.vimp_min + j]
     r = n % ring_len
     ring[r, STATE.x], ring[r, STATE.v], ring[r, STATE.voltage] = x, v, V
     ring[r, STATE.stop_x], ring[r, STATE.stop_v] = L[LANE.stop_x + j], L[LANE.stop_v + j]

@@ -92,6 +92,8 @@ METRIC = _layout("MetricRow", (
     ("contact_force_max_lower", "peak contact force of the lower stop [N]"),
     ("stop_displacement_max", "largest |x_s| of the (upper) stop [m]"),
     ("contact_force_spread", "largest minus smallest peak force of the impacts [N]"),
+    ("near_miss", "smallest distance a swing's top stays short of a rigid stop [m]"),
+    ("approach_velocity_min", "smallest approach velocity at first touch of a stop [m/s]"),
     ("orbit_period", "forcing periods per orbit, 0 when not settled [-]"),
     ("status", "outcome, a code of STATUS [-]"),
     ("periods_run", "forcing periods integrated [-]"),
@@ -104,7 +106,7 @@ N_VALUES = METRIC.orbit_period
 #: end states alone are read (a Newton iterate's perturbed copies) skip them.
 BOOKED_METRICS = (METRIC.v_peak, METRIC.power_peak, METRIC.x_max, METRIC.x_min,
                   METRIC.contact_force_max, METRIC.contact_force_max_lower,
-                  METRIC.contact_force_spread)
+                  METRIC.contact_force_spread, METRIC.near_miss)
 
 #: Outcome codes of a point (metric ``status``).
 STATUS = namedtuple("Status", ("settled", "not_settled", "diverged", "too_stiff"))(0, 1, 2, 3)
@@ -134,6 +136,8 @@ ACC = _layout("Accumulators", (
     ("stop_x_max", "largest |x_s| [m]"),
     ("fc_peak_min", "smallest located peak of the upper stop's contact force [N]"),
     ("fc_peak_max", "largest located peak of the upper stop's contact force [N]"),
+    ("near_miss", "smallest distance a swing's top stayed short of a rigid stop [m]"),
+    ("vimp_min", "smallest approach velocity at first touch of a stop [m/s]"),
 ))
 
 #: Points stepped together by one thread, and lanes that take the contact-free code together
@@ -227,6 +231,9 @@ LANE = _layout("LaneTable", (
     # ... the peaks of the upper stop's contact force over the period ...
     ("fc_peak_min", "smallest located peak of the upper stop's force [N]"),
     ("fc_peak_max", "largest located peak of the upper stop's force [N]"),
+    # ... and how near the swings came to a grazing of a rigid stop (booking) ...
+    ("near_miss", "smallest distance a swing's top stayed short of the stop [m]"),
+    ("vimp_min", "smallest approach velocity at first touch [m/s]"),
     # ... and a moving stop (stop_motion): a lane with one takes every step in scalar code.
     ("stop_x", "stop displacement [m]"), ("stop_v", "stop velocity [m/s]"),
     ("stop_on", "1: in contact with the moving stop"),

@@ -89,7 +89,7 @@ def reduce(acc, n, periods, p, metrics):
     """Metrics over the last ``periods`` forcing periods from the per-period accumulators."""
     q, n_imp, sum_vimp, n_low, fc_low = 0.0, 0.0, 0.0, 0.0, 0.0
     xmax, xmin, vpk, fcmax = -np.inf, np.inf, 0.0, 0.0
-    smax, peak_min, peak_max = 0.0, np.inf, -np.inf
+    smax, peak_min, peak_max, miss, vimp_min = 0.0, np.inf, -np.inf, np.inf, np.inf
     for i in range(periods):
         slot = (n - 1 - i) % MAX_ORBIT_PERIOD
         q += acc[slot, ACC.q]
@@ -102,6 +102,8 @@ def reduce(acc, n, periods, p, metrics):
         smax = max(smax, acc[slot, ACC.stop_x_max])
         peak_min = min(peak_min, acc[slot, ACC.fc_peak_min])
         peak_max = max(peak_max, acc[slot, ACC.fc_peak_max])
+        miss = min(miss, acc[slot, ACC.near_miss])
+        vimp_min = min(vimp_min, acc[slot, ACC.vimp_min])
     mean_v2 = q / (max(periods, 1) * p[PARAM.period])
     metrics[METRIC.power] = mean_v2 / p[PARAM.resistance]
     metrics[METRIC.v_rms] = math.sqrt(mean_v2)
@@ -117,3 +119,6 @@ def reduce(acc, n, periods, p, metrics):
     # (no located peak: no impact, or contacts too short for three force samples)
     metrics[METRIC.contact_force_spread] = peak_max - peak_min if peak_max >= peak_min \
         else (0.0 if n_imp == 0 else np.nan)
+    # (no swing's top short of a rigid stop; no first touch)
+    metrics[METRIC.near_miss] = miss if miss < np.inf else np.nan
+    metrics[METRIC.approach_velocity_min] = vimp_min if vimp_min < np.inf else np.nan

@@ -198,7 +198,7 @@ def step(L, j):
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = force(xn, vn, xsn, vsn, on * kh, g, ch)
     booking.extrema(L, j, x, v, V, voltage_rate(V, v, irc, thc), xn, vn, Vn,
-                    voltage_rate(Vn, vn, irc, thc), h, fcp, fc, fcn, True)
+                    voltage_rate(Vn, vn, irc, thc), h, fcp, fc, fcn, True, np.inf)
     smax = max(L[LANE.stop_x_max + j], abs(xsn))
     if vs > 0.0 >= vsn or vs < 0.0 <= vsn:
         smax = max(smax, abs(hermite.extremum(xs, vs, xsn, vsn, h)))

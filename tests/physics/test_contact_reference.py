@@ -45,6 +45,7 @@ def test_steady_orbit_matches_scipy(scene, reference_orbits):
     # Peaks of the reference come from dense output sampled 40000 times per period,
     # good to ~3e-8; the integrals and the located touch are better.
     for name, rel in [("v_rms", 2e-8), ("power", 4e-8), ("approach_velocity", 2e-8),
+                      ("approach_velocity_min", 2e-8),
                       ("v_peak", 1e-7), ("x_max", 1e-7), ("x_min", 1e-7),
                       ("contact_force_max", 1e-5)]:
         assert m[name] == pytest.approx(ref[name], rel=rel), name

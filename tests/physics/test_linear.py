@@ -43,3 +43,18 @@ def test_rk4_error_falls_at_fourth_order():
     orders = -np.diff(np.log(errors)) / np.diff(np.log(steps))
     assert errors[-1] < 1e-7
     assert np.all((orders > 3.7) & (orders < 4.3)), orders
+
+
+@pytest.mark.parametrize("clearance", [0.3, 0.05])
+@pytest.mark.parametrize("side", ["upper", "lower"])
+def test_near_miss_is_the_gap_less_the_phasor_amplitude(clearance, side):
+    """A stop just beyond the linear amplitude |X|, above or below, is never touched, and
+    the orbit's near_miss is its gap less |X| (the closed form's top or bottom of the
+    swing), to the step's error; it has no impact (approach_velocity_min None: NaN)."""
+    X, _ = phasor(**run_scene("paper", gap=1.0).parameters)
+    gap = (1 + clearance) * abs(X)
+    stops = dict(gap=gap) if side == "upper" else dict(gap=1.0, lower_gap=gap)
+    m = run_scene("paper", steps_per_period=1024, settle_tolerance=1e-12, **stops).metrics
+    assert m["impacts_per_period"] == m["impacts_per_period_lower"] == 0
+    assert m["approach_velocity_min"] is None
+    assert m["near_miss"] == pytest.approx(clearance * abs(X), rel=1e-5)

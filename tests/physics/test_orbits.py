@@ -293,6 +293,32 @@ def test_a_stable_orbit_the_motion_only_passes_is_not_taken():
                                   restitution=0.8857142857142857)
 
 
+def test_a_stable_orbit_that_nearly_grazes_is_not_taken_from_beyond_its_margin():
+    """At gap 0.25 um, 103.8 Hz, 100 kOhm, restitution 0.886 (a point of
+    examples/million_points.toml, automatic step) a stable period-2 orbit (spectral radius
+    0.49) has a swing whose top stays 0.006 of the amplitude short of the stop. The motion
+    from rest passes it again and again, never nearer than 0.012 (the transient, run for
+    40,000 periods, does not settle): within NEAR, its next periods as the monodromy
+    predicts, yet beyond that near miss, where the period map is not the orbit's. It was
+    taken after 182 periods; the motion must now come within the margin (orbits.reach),
+    and the point is reported not settled, as the transient says."""
+    _not_settled_as_the_transient(gap=0.25e-6, frequency=103.79746835443038,
+                                  resistance=1e5, restitution=0.8857142857142857)
+
+
+def test_reach_is_the_margin_from_grazing():
+    """orbits.reach: NEAR for an orbit far from grazing or without a stop, else the near
+    miss relative to the x scale, or the overshoot 0.5 (v_imp / (w x))^2 of the slowest
+    impact, whichever is smaller."""
+    m = np.full((4, len(METRIC)), np.nan)
+    m[1, METRIC.near_miss] = 0.003
+    m[2, METRIC.approach_velocity_min] = 0.1
+    m[3, [METRIC.near_miss, METRIC.approach_velocity_min]] = 0.5, 2.0
+    scale = np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 2.0, 1.0]])
+    np.testing.assert_allclose(orbits.reach(m, scale),
+                               [orbits.NEAR, 0.003, 0.5 * 0.05 ** 2, orbits.NEAR])
+
+
 def _not_settled_as_the_transient(**point):
     """The paper scene at ``point`` (a budget of 1000 periods) is not settled: neither in
     the transient run for 5000 periods, nor by the solver, which gives no multipliers."""
