@@ -393,6 +393,9 @@ class _Points:
         self.hint = np.zeros(n)  # periods the trajectory should run next (0: no idea)
         self.left = np.zeros(n)  # periods of the trajectory's chunk still to run
         self.tested = np.zeros(n, bool)  # the engine's steady-state test passed
+        # period of the stable orbit with contact last turned away (0: none)
+        self.refused = np.zeros(n, dtype=np.int64)
+        self.retry = np.zeros(n, bool)  # the attempt is at that period
         self.scale = np.ones((n, self.D))
         self.scale[:] = self._linear_scale()
         self.jacobian = np.full((n, self.D, self.D), np.nan)
@@ -508,7 +511,9 @@ class _Points:
             start += len(b) * w
         rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
         j = k + len(chord)
-        rows[j:j + len(transient), PARAM.max_periods] = np.minimum(self.left[transient], SLICE)
+        left = self.left[transient]  # (and no slice but a chunk's whole is that short)
+        rows[j:j + len(transient), PARAM.max_periods] = np.where(
+            left < SLICE + MAX_ORBIT_PERIOD, left, SLICE)
         rows[j + len(transient):, PARAM.steps] *= 2
         metrics = np.empty((len(owners), len(METRIC)))
         strobes = np.empty((len(owners), SAMPLES, self.D))
@@ -634,7 +639,10 @@ class _Points:
         radius = np.zeros(len(idx))
         if looked.any():
             radius[looked] = np.max(np.abs(np.linalg.eigvals(jac[looked])), axis=1)
-        far = looked & ((distance > NEAR) | (radius > EXPANDING))
+        # (not in an attempt at the period of the stable orbit with contact the last one
+        # turned away: the motion nears that orbit, and the monodromy taken off it, by a
+        # multiplier near -1, may expand)
+        far = looked & ((distance > NEAR) | (radius > EXPANDING) & ~self.retry[idx])
         # a later iterate of an attempt from the motion, whose run touched a stop, is given
         # up when Newton has come within SETTLING of an orbit beyond NEAR of the motion's
         # state at the attempt's start (on_its_way takes an orbit with contact from within
@@ -782,6 +790,7 @@ class _Points:
             hint = np.ceil(p[~taken] * np.log(near[~taken] / (2 * d0[~taken]))
                            / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
         self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > near[~taken]), hint, 0)
+        self.refused[idx[~taken]] = np.where(stable[~taken] & w[~taken], p[~taken], 0)
         self._give_up(idx[~taken])
 
     def _give_up(self, idx):
@@ -823,7 +832,12 @@ class _Points:
         chunk = np.maximum(self.run[idx], FIRST_CHUNK)
         hint = self.hint[idx]
         chunk = np.where(hint > 0, np.clip(hint, self.p[idx], 4 * chunk), chunk)
-        self.left[idx] = np.minimum(chunk, self.rows[idx, PARAM.max_periods] - self.run[idx])
+        # (a motion that does not settle reports its last MAX_ORBIT_PERIOD periods: a chunk
+        # that ends short of the budget leaves twice that, room for an attempt of up to
+        # MAX_ORBIT_PERIOD periods and a last piece of trajectory as long as the report)
+        rest = self.rows[idx, PARAM.max_periods] - self.run[idx]
+        self.left[idx] = np.where((chunk >= rest) | (rest <= 2 * MAX_ORBIT_PERIOD), rest,
+                                  np.minimum(chunk, rest - 2 * MAX_ORBIT_PERIOD))
 
     def _after_transient(self, idx, m, f, strobes):
         if not idx.size:
@@ -849,8 +863,16 @@ class _Points:
         on = ~settled & (self.left[idx] > 0)  # the chunk goes on in the next round
         idx, strobes, m, settled = idx[~on], strobes[~on], m[~on], settled[~on]
         self.tested[idx[settled]] = True
-        self.p[idx] = np.where(settled, m[:, METRIC.orbit_period].astype(np.int64),
-                               _orbit_period(strobes, self.scale[idx]))
+        # (a motion nearing a stable orbit along a multiplier near -1 repeats after twice
+        # its period better than after it, and Newton on that map, whose multiplier is
+        # then near +1, stalls: where the samples suggest twice the period of the orbit
+        # with contact it was last turned away from, the period is that orbit's)
+        suggested = _orbit_period(strobes, self.scale[idx])
+        refused = self.refused[idx]
+        suggested = np.where((refused > 0) & (suggested == 2 * refused), refused, suggested)
+        self.retry[idx] = ~settled & (suggested == refused)
+        self.refused[idx] = 0
+        self.p[idx] = np.where(settled, m[:, METRIC.orbit_period].astype(np.int64), suggested)
         self._attempt(idx)
 
     # -- error estimate and accuracy -----------------------------------------------------

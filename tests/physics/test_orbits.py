@@ -403,6 +403,24 @@ def test_unstable_fixed_points_are_not_taken_and_chaos_stays_unsettled():
     assert np.isnan(orbits.multipliers[0]).all()
 
 
+@pytest.mark.parametrize("gap_index, frequency_index", [(36, 3), (51, 4), (53, 9)])
+def test_a_motion_that_does_not_settle_reports_its_last_periods(gap_index, frequency_index):
+    """Points of the benchmark grid (benchmarks/cases.py) whose motion does not settle in
+    its 1000 periods: the solver's metrics are those of the transient run from rest to the
+    budget, over its last 16 periods (the run ends on the same state bit for bit), whatever
+    attempts the solver made on the way. They were over the last piece of trajectory the
+    solver ran, as short as 3 periods, and moved by up to 12 % with the attempts' timing."""
+    gap = np.linspace(0.25e-6, 4e-6, 64)[gap_index]
+    frequency = np.linspace(100.0, 250.0, 64)[frequency_index]
+    packed = packing.pack_points([resolve_parameters("paper", gap=gap, frequency=frequency,
+                                                     steps_per_period=1024)])
+    reference = _transient(packed.rows, packed.states)[0]
+    orbits = solve_orbits(packed.rows, packed.states)
+    assert reference[METRIC.status] == orbits.metrics[0, METRIC.status] == STATUS.not_settled
+    np.testing.assert_array_equal(orbits.metrics[0, :METRIC.orbit_period],
+                                  reference[:METRIC.orbit_period])
+
+
 def test_attempts_end_at_an_orbit_they_could_not_take(monkeypatch):
     """Gap 2.54 um, 112.7 Hz: the motion never settles (the transient engine's own test at
     the same budget says so), and its contact comes and goes. From a first run without
