@@ -306,6 +306,33 @@ def test_a_stable_orbit_that_nearly_grazes_is_not_taken_from_beyond_its_margin()
                                   resistance=1e5, restitution=0.8857142857142857)
 
 
+def test_an_orbit_reached_along_a_multiplier_near_minus_one_is_taken():
+    """At gap 2.28 um, 141.8 Hz, 1 kOhm, restitution 0.904 (a point of
+    examples/million_points.toml, automatic step) the motion nears a period-2 orbit with
+    the multiplier -0.9999 and the near miss 0.045 of its amplitude: it is turned away at
+    first, from 0.061 of it, and the motion's samples then repeat after 4 periods better
+    than after 2. The solver tries period 2 again and takes the orbit within the budget of
+    1000 periods; the motion from rest, run at the orbit's step, comes nearer it in each
+    of three runs of 2000 periods."""
+    point = dict(gap=2.28125e-06, frequency=141.77215189873417, resistance=1000.0,
+                 restitution=0.9040816326530612)
+    packed = packing.pack_points([resolve_parameters("paper", **point)])
+    solved = solve_orbits(packed.rows, packed.states)
+    m = solved.metrics[0]
+    assert m[METRIC.status] == STATUS.settled and m[METRIC.orbit_period] == 2
+    assert solved.multipliers[0, 0].real == pytest.approx(-0.9999, abs=1e-4)
+    rows = packed.rows.copy()
+    rows[:, PARAM.steps], rows[:, PARAM.max_periods], rows[:, PARAM.tolerance] = (
+        solved.steps[0], 2000, 0.0)
+    scale = np.array([m[METRIC.x_max], m[METRIC.x_max] * 2 * np.pi * point["frequency"],
+                      m[METRIC.v_peak]])
+    state, distances = packed.states.copy(), []
+    for _ in range(3):
+        _engine.run_points(rows, state, np.empty((1, len(METRIC))), np.empty((1, 0, 3)))
+        distances.append(np.max(np.abs(state[0, :3] - solved.finals[0, :3]) / scale))
+    assert distances[2] < distances[1] < distances[0] < orbits.NEAR, distances
+
+
 def test_reach_is_the_margin_from_grazing():
     """orbits.reach: NEAR for an orbit far from grazing or without a stop, else the near
     miss relative to the x scale, or the overshoot 0.5 (v_imp / (w x))^2 of the slowest
