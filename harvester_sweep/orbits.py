@@ -511,7 +511,8 @@ class _Points:
             start += len(b) * w
         rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
         j = k + len(chord)
-        left = self.left[transient]  # (and no slice but a chunk's whole is that short)
+        # (no slice shorter than MAX_ORBIT_PERIOD unless the whole chunk is: see _chunk)
+        left = self.left[transient]
         rows[j:j + len(transient), PARAM.max_periods] = np.where(
             left < SLICE + MAX_ORBIT_PERIOD, left, SLICE)
         rows[j + len(transient):, PARAM.steps] *= 2
@@ -827,7 +828,8 @@ class _Points:
     def _chunk(self, idx):
         """Points ``idx`` integrate their trajectory on: as long as all it has run so far
         (at least FIRST_CHUNK periods), or the periods the last attempt's monodromy says
-        the motion needs to come NEAR its orbit, within the budget."""
+        the motion needs to come NEAR its orbit, within the budget: to its end, or short of
+        it by 2 MAX_ORBIT_PERIOD periods at least."""
         self.phase[idx] = _TRANSIENT
         chunk = np.maximum(self.run[idx], FIRST_CHUNK)
         hint = self.hint[idx]
