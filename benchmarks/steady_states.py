@@ -10,8 +10,9 @@ the same drift of this shared machine):
 - 64 x 64 gap x frequency sweeps (paper scene, 1024 steps per period, every point from rest,
   no error estimate), end to end through ``run_sweep``: the grid of benchmarks/cases.py and
   the one issue 19 measured (2658 of its points never touch the stop):
-  wall time, RK4 steps (Jacobian copies included after), time per settled point, and how
-  far the two agree where both settled;
+  wall time, RK4 steps (Jacobian copies included after), time per settled point, how
+  far the two agree where both settled, and what of the time after was the engine's
+  calls and what the solver's Python between them;
 - single scenes at the default accuracy (1e-7): the paper scene, a lightly damped
   resonance and a 1 GOhm load, the last two against the closed form;
 - chunks of 4096 points spread over examples/million_points.toml, each checkout with its
@@ -36,6 +37,7 @@ import numpy as np
 
 from benchmarks.cases import GRID, STEPS_PER_PERIOD, sweep_spec
 from benchmarks.compare import _load
+from benchmarks.engine_calls import EngineCalls
 from tests.helpers import phasor
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,14 +66,27 @@ def _cpu() -> str:
 
 def _best(runs: dict, rounds: int, work) -> dict:
     """``work(tag, hs)`` for each checkout in turn, ``rounds`` times; best time of each and
-    the last result."""
-    times, out = {tag: [] for tag in runs}, {}
+    the result of that run."""
+    best = {}
     for _ in range(rounds):
         for tag, hs in runs.items():
             start = time.perf_counter()
-            out[tag] = work(tag, hs)
-            times[tag].append(time.perf_counter() - start)
-    return {tag: (min(times[tag]), out[tag]) for tag in runs}
+            out = work(tag, hs)
+            elapsed = time.perf_counter() - start
+            if tag not in best or elapsed < best[tag][0]:
+                best[tag] = (elapsed, out)
+    return best
+
+
+def _sweep_with_calls(spec):
+    """``work`` for _best: a checkout's ``run_sweep`` of ``spec``, and for the checkout
+    after, the spans of its engine calls (EngineCalls)."""
+    def work(tag, hs):
+        if tag != "after":
+            return hs.run_sweep(spec, progress=False), None
+        with EngineCalls(__import__(hs.__name__ + "._engine", fromlist=["x"])) as calls:
+            return hs.run_sweep(spec, progress=False), calls
+    return work
 
 
 def main() -> None:
@@ -96,8 +111,8 @@ def main() -> None:
     for title, grid in GRIDS.items():
         spec = sweep_spec(grid)
         spec["sweep"]["outputs"] = [*spec["sweep"]["outputs"], "impacts_per_period"]
-        res = _best(runs, args.rounds, lambda tag, hs: hs.run_sweep(spec, progress=False))
-        (t0, a), (t1, b) = res["before"], res["after"]
+        res = _best(runs, args.rounds, _sweep_with_calls(spec))
+        (t0, (a, _)), (t1, (b, calls)) = res["before"], res["after"]
         steps_a = float(a.periods_run.sum()) * STEPS_PER_PERIOD
         steps_b = float(b.rk4_steps.sum())
         settled_a, settled_b = int((a.status == 0).sum()), int((b.status == 0).sum())
@@ -118,6 +133,10 @@ def main() -> None:
                   f"| settled points | {settled_a} | {settled_b} | |",
                   f"| wall time per settled point | {1e3 * t0 / settled_a:.3f} ms | "
                   f"{1e3 * t1 / settled_b:.3f} ms | {t0 / settled_a / (t1 / settled_b):.1f} x |",
+                  f"| after's wall time in its {len(calls.spans)} engine calls (before / it) | "
+                  f"| {calls.seconds:.2f} s | {t0 / calls.seconds:.1f} x |",
+                  f"| ... in the solver's Python between them (before / end to end less it) | "
+                  f"| {calls.between:.2f} s | {t0 / (t1 - calls.between):.1f} x |",
                   "", f"Largest relative difference of `power` where both settled on orbits "
                   f"of the same period ({int(both.sum())} points): {diff:.1e}.", ""]
 
