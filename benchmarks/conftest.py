@@ -139,12 +139,13 @@ def _table(f: dict) -> str:
                     f"(`harvester-sweep run`, best of {COLD_START_ROUNDS}) | "
                     f"{f['cold_start']:.2f} s | |")
     if "million_wall" in f:
-        day = time.strftime("%Y-%m-%d")
+        # (the run and its machine in the row: a later run without --million carries it)
+        when = f"{time.strftime('%Y-%m-%d %H:%M')} on {c['model']}, {c['simd']}"
         rows.append(f"| 1e6-point gap x frequency x resistance x restitution sweep "
-                    f"(examples/million_points.toml, automatic step; run {day}"
+                    f"(examples/million_points.toml, automatic step; run {when}"
                     f") | {f['million_wall'] / 60:.1f} min | peak memory "
                     f"{f['million_rss'] / 2**30:.2f} GiB; {f['million_settled']} settled |")
-    else:  # (about 20 minutes, so not every run: the last measured, with its date)
+    else:  # (about 20 minutes, so not every run: the last measured, with its run)
         old = RESULT.read_text().splitlines() if RESULT.exists() else []
         rows += [line for line in old if line.startswith("| 1e6-point")]
     return "\n".join(rows) + "\n"
