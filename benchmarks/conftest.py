@@ -121,7 +121,7 @@ def _table(f: dict) -> str:
                     f"ensemble of {n}: engine per point, {row['threads']} threads / 1 thread | "
                     f"{row['engine'] * 1e3:.3f} ms / {row['engine_1'] * 1e3:.3f} ms | "
                     f"distance from the exact orbit {row['error']:.1e} |")
-        rows.append(f"| ... of which the engine's calls (the rest: the solver's Python between "
+        rows.append(f"| ... of which the engine's calls (the rest: the solver's Python around "
                     f"them), in the fastest solve on {row['threads']} threads | "
                     f"{row['calls'] * 1e3:.3f} ms | {row['calls'] / row['engine']:.0%} of it |")
         for key, name in (("lsoda", "SciPy LSODA, one point (1 core)"),
