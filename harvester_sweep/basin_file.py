@@ -16,24 +16,23 @@ A basin file::
                               # reached from rest; omit for starts drawn from a box
     # box = { x = 3e-6, v = 5e-3, voltage = 2e-5 }   # [m, m/s, V]: the box's half-widths
 
-Everything is checked before any integration; a bad entry raises ParameterError naming its
-key.
+An omitted option takes its value from ``basins.DEFAULTS``. Everything is checked before
+any integration; a bad entry raises ParameterError naming its key.
 """
 
 from __future__ import annotations
 
-from .basins import check_draws
-from .parameters import ParameterError, check_names, resolve_parameters
-from .sweep_file import axis, read_toml, table, unknown_keys
+from .basins import DEFAULTS, BasinSpec, check_basins
+from .parameters import check_names
+from .sweep_file import read_toml, table, unknown_keys
 
 _TOP_KEYS = ("preset", "parameters", "grid", "basins")
 _KEYS = ("samples", "seed", "shock", "box")
-DEFAULT_SAMPLES = 200
 
 
-def load_basins(source) -> dict:
-    """The checked problem of a basin file (a TOML path or a dict of its shape): keyword
-    arguments of :func:`harvester_sweep.basins.basin_map`.
+def load_basins(source) -> BasinSpec:
+    """The checked problem of a basin file (a TOML path or a dict of its shape), which
+    :func:`harvester_sweep.basins.basin_map` takes as it is.
 
     Raises
     ------
@@ -41,21 +40,15 @@ def load_basins(source) -> dict:
         For a missing or unreadable file, an unknown key or a bad value, naming the key.
     """
     source = read_toml(source, "basin", _TOP_KEYS)
-    preset = source.get("preset", "paper")
     fixed = dict(table(source, "parameters"))
-    check_names(fixed)
-    resolve_parameters(preset, **fixed)
+    check_names(fixed)  # (before the call: `preset` among them would be a TypeError)
     grid = table(source, "grid")
-    for name, entry in grid.items():
-        axis(name, entry, fixed)
     options = table(source, "basins")
     unknown_keys(options, _KEYS, "basins.")
-    kwargs = {"samples": DEFAULT_SAMPLES, "seed": 0, **options}
-    try:
-        check_draws(kwargs["samples"], kwargs["seed"], kwargs.get("box"), kwargs.get("shock"))
-    except ParameterError as error:
-        raise ParameterError(f"basins.{error}") from None
-    return {"grid": grid, "preset": preset, **kwargs, **fixed}
+    given = {**DEFAULTS, **options}
+    if "preset" in source:
+        given["preset"] = source["preset"]
+    return check_basins(grid, fixed=fixed, prefix="basins.", **given)
 
 
 __all__ = ["load_basins"]

@@ -28,7 +28,7 @@ from __future__ import annotations
 import itertools
 import math
 import sys
-from dataclasses import fields, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 import xarray as xr
@@ -60,11 +60,85 @@ CALL_STARTS = 8192
 #: that reached it).
 ATTRACTOR_OUTPUTS = ("orbit_period", "power", "v_peak", "x_max", "x_min",
                      "impacts_per_period", "contact_force_max", "spectral_radius")
+#: Defaults of a map's options, the one place they are written: basin_map's and
+#: basin_fractions' keywords and a basin file's omitted keys (basin_file) read them. Starts
+#: per grid point [-], the seed [-], and starts from each point's default box (no box, no
+#: shock).
+DEFAULTS = {"preset": "paper", "samples": 200, "seed": 0, "box": None, "shock": None}
+#: Starts basin_fractions draws at its one point by default [-]: one point affords more
+#: than each point of a map.
+POINT_SAMPLES = 1000
 
 
-def basin_fractions(preset: str | None = "paper", samples: int = 1000, seed: int = 0,
-                    box: dict | None = None, shock: float | None = None,
-                    **parameters) -> xr.Dataset:
+@dataclass(frozen=True)
+class BasinSpec:
+    """A checked basin problem (:func:`check_basins`), which :func:`basin_map` takes as it
+    is.
+
+    Attributes
+    ----------
+    preset : str or None
+        Preset the parameters start from (``None``: the paper's).
+    fixed : dict
+        Fixed parameters by name (SI units), as given, not including the grid axes.
+    axes : dict of str -> numpy.ndarray
+        Grid axis name -> values (SI units of the parameter), in the order given; empty
+        for one point.
+    spacing : dict of str -> str
+        Grid axis name -> ``"linear"``, ``"log"`` or ``"list"``.
+    samples, seed : int
+        Starts per grid point, and the seed of the draws [-].
+    box : dict or None
+        Half-widths of the box of starts: ``x`` [m], ``v`` [m/s], ``voltage`` [V].
+    shock : float or None
+        Size of the base shock [m/s], instead of a box.
+    base : dict
+        The validated parameters of ``preset`` with ``fixed`` (SI units).
+    points : list of dict
+        The validated parameters of every grid point (SI units), the last axis fastest,
+        each checked runnable (not too stiff).
+    """
+
+    preset: str | None
+    fixed: dict
+    axes: dict
+    spacing: dict
+    samples: int
+    seed: int
+    box: dict | None
+    shock: float | None
+    base: dict
+    points: list
+
+
+def check_basins(grid, preset, samples, seed, box, shock, fixed: dict,
+                 prefix: str = "") -> BasinSpec:
+    """The checked basin problem, every value validated once here: ``grid`` as
+    :func:`basin_map`'s, the draw options, ``fixed`` the fixed parameters by name (SI
+    units). Bad input raises ParameterError naming it (a draw option after ``prefix``),
+    with its unit and allowed range; a grid point too stiff raises TooStiffError."""
+    try:
+        samples, seed, box, shock = check_draws(samples, seed, box, shock)
+    except ParameterError as error:
+        raise ParameterError(f"{prefix}{error}") from None
+    base = resolve_parameters(preset, **fixed)
+    if not isinstance(grid, dict):
+        raise ParameterError("grid: must be a table of parameter name -> values, e.g. "
+                             "{\"frequency\": [240.0, 245.0]}")
+    axes, spacing = {}, {}
+    for name, entry in grid.items():
+        axes[name], spacing[name] = axis(name, entry, fixed)
+    points = [resolve_parameters(preset, **fixed, **dict(zip(axes, values)))
+              for values in itertools.product(*(a.tolist() for a in axes.values()))]
+    for p in points:
+        check_runnable(p)
+    return BasinSpec(preset, dict(fixed), axes, spacing, samples, seed, box, shock, base,
+                     points)
+
+
+def basin_fractions(preset: str | None = DEFAULTS["preset"], samples: int = POINT_SAMPLES,
+                    seed: int = DEFAULTS["seed"], box: dict | None = DEFAULTS["box"],
+                    shock: float | None = DEFAULTS["shock"], **parameters) -> xr.Dataset:
     """The attractors reached from ``samples`` starts at one point, and each one's share.
 
     Parameters
@@ -106,16 +180,19 @@ def basin_fractions(preset: str | None = "paper", samples: int = 1000, seed: int
     return basin_map({}, preset, samples, seed, box, shock, progress=False, **parameters)
 
 
-def basin_map(grid: dict, preset: str | None = "paper", samples: int = 200, seed: int = 0,
-              box: dict | None = None, shock: float | None = None, *, progress: bool = True,
-              **parameters) -> xr.Dataset:
+def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
+              samples: int = DEFAULTS["samples"], seed: int = DEFAULTS["seed"],
+              box: dict | None = DEFAULTS["box"], shock: float | None = DEFAULTS["shock"], *,
+              progress: bool = True, **parameters) -> xr.Dataset:
     """:func:`basin_fractions` at every point of a grid, with the same draws at each.
 
     Parameters
     ----------
-    grid : dict
+    grid : dict or BasinSpec
         One axis per parameter name: a list of values [SI] or a range table ``{"start",
-        "stop", "num", "scale"}``, as a sweep file's ``[grid]``.
+        "stop", "num", "scale"}``, as a sweep file's ``[grid]``. Or a problem already
+        checked (:func:`check_basins`, ``basin_file.load_basins``), taken as it is: then
+        no other argument but ``progress`` is given.
     preset, samples, seed, box, shock, **parameters
         As :func:`basin_fractions`; ``box`` and ``shock`` apply at every point (the default
         box is each point's own).
@@ -129,16 +206,25 @@ def basin_map(grid: dict, preset: str | None = "paper", samples: int = 200, seed
         point most frequent first, padded with NaN, and orbit_period 0, to the largest
         count). Variables as :func:`basin_fractions`; ``impact_basin_fraction`` is the map
         designers look at.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`basin_fractions`, and for a bad grid or a grid point too stiff, before
+        any work.
     """
-    samples, seed, box, shock = check_draws(samples, seed, box, shock)
-    base = resolve_parameters(preset, **parameters)
-    axes, spacing = {}, {}
-    for name, entry in grid.items():
-        axes[name], spacing[name] = axis(name, entry, parameters)
-    points = [resolve_parameters(preset, **parameters, **dict(zip(axes, values)))
-              for values in itertools.product(*(a.tolist() for a in axes.values()))]
-    for p in points:
-        check_runnable(p)
+    options = dict(preset=preset, samples=samples, seed=seed, box=box, shock=shock)
+    if not isinstance(grid, BasinSpec):
+        spec = check_basins(grid, fixed=parameters, **options)
+    elif parameters or options != DEFAULTS:
+        # (a checked problem holds every option: another beside it would be ignored)
+        raise ParameterError("a BasinSpec is the whole problem: give no other argument "
+                             "beside it but progress")
+    else:
+        spec = grid
+    preset, samples, seed, box, shock = (spec.preset, spec.samples, spec.seed, spec.box,
+                                         spec.shock)
+    base, axes, spacing, points = spec.base, spec.axes, spec.spacing, spec.points
     halves = [_box(p, box) for p in points] if shock is None else None
     found = _solve(points, samples, seed, halves, shock, progress)
 
@@ -321,4 +407,4 @@ def _attractors(results, part: slice, rows: np.ndarray) -> dict:
     return found
 
 
-__all__ = ["basin_fractions", "basin_map"]
+__all__ = ["BasinSpec", "basin_fractions", "basin_map", "check_basins"]

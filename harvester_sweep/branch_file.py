@@ -16,13 +16,13 @@ A continuation file::
     max_points = 2000         # budget of points, on all branches
     period_doubling = "mark"  # or "switch": also follow the doubled branch
 
-Everything is checked before any integration; a bad entry raises ParameterError naming its
-key.
+An omitted option takes its value from ``continuation.DEFAULTS`` (those above). Everything
+is checked before any integration; a bad entry raises ParameterError naming its key.
 """
 
 from __future__ import annotations
 
-from .continuation import DEFAULTS, check_continuation
+from .continuation import DEFAULTS, ContinuationSpec, check_continuation
 from .sweep_file import read_toml, table, unknown_keys
 
 _TOP_KEYS = ("preset", "parameters", "continuation")
@@ -30,9 +30,10 @@ _KEYS = ("parameter", "start", "stop", "step", "min_step", "max_step", "max_poin
          "period_doubling")
 
 
-def load_continuation(source) -> dict:
-    """The checked problem of a continuation file (a TOML path or a dict of its shape):
-    keyword arguments of :func:`harvester_sweep.continuation.continue_branch`.
+def load_continuation(source) -> ContinuationSpec:
+    """The checked problem of a continuation file (a TOML path or a dict of its shape),
+    which :func:`harvester_sweep.continuation.continue_branch` takes as it is; an omitted
+    key takes its value from ``continuation.DEFAULTS``.
 
     Raises
     ------
@@ -43,13 +44,10 @@ def load_continuation(source) -> dict:
     fixed = dict(table(source, "parameters"))
     options = table(source, "continuation")
     unknown_keys(options, _KEYS, "continuation.")
-    kwargs = {**DEFAULTS, "period_doubling": "mark", **options}
-    kwargs.setdefault("parameter", "frequency")
-    check_continuation(source.get("preset", "paper"), kwargs["parameter"], kwargs.get("start"),
-                       kwargs.get("stop"), kwargs["step"], kwargs["min_step"],
-                       kwargs["max_step"], kwargs["max_points"], kwargs["period_doubling"],
-                       fixed, prefix="continuation.")
-    return {"preset": source.get("preset", "paper"), **kwargs, **fixed}
+    given = {**DEFAULTS, "start": None, "stop": None, **options}
+    if "preset" in source:
+        given["preset"] = source["preset"]
+    return check_continuation(**given, fixed=fixed, prefix="continuation.")
 
 
 __all__ = ["load_continuation"]

@@ -230,11 +230,11 @@ def _run(args) -> int:
     from .sweep_file import load_sweep
 
     _check_output(args.output, (".nc",))
-    load_sweep(args.sweep_file)  # bad input: one line, before anything else
+    spec = load_sweep(args.sweep_file)  # bad input: one line, before anything else
     if not args.quiet:
         _announce_compilation()
-    try:
-        ds = run_sweep(args.sweep_file, args.output, resume=args.resume,
+    try:  # (the checked spec, not the file: run_sweep takes it as it is)
+        ds = run_sweep(spec, args.output, resume=args.resume,
                        progress=not args.quiet, workers=args.workers, scheduler=args.scheduler,
                        yes=args.yes)
     except KeyboardInterrupt:
@@ -271,7 +271,7 @@ def _continue(args) -> int:
     spec = load_continuation(args.spec_file)  # bad input: one line, before anything else
     _announce_compilation()
     try:
-        ds = continue_branch(**spec)
+        ds = continue_branch(spec)
     except NoOrbitError as error:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
         return EXIT_DIVERGED
@@ -307,7 +307,7 @@ def _basins(args) -> int:
     spec = load_basins(args.spec_file)  # bad input: one line, before anything else
     _announce_compilation()
     start = time.perf_counter()
-    ds = basin_map(**spec, progress=not args.quiet)
+    ds = basin_map(spec, progress=not args.quiet)
     print(_basin_summary(ds, time.perf_counter() - start))
     return _write(ds, args, "plot_basins")
 

@@ -83,9 +83,53 @@ SCALE_SAMPLES = 201
 PERIOD_DOUBLING = ("mark", "switch")
 #: The bifurcation (outputs.BIFURCATIONS) each test function of _Problem.tests flags.
 TESTED = ("fold", "period_doubling", "neimark_sacker", "grazing", "grazing")
-#: Defaults of the options, each in units of the parameter's range |stop - start|
-#: (step, min_step, max_step) or a count (max_points).
-DEFAULTS = {"step": 0.01, "min_step": 1e-7, "max_step": 0.05, "max_points": 2000}
+#: Defaults of the options, the one place they are written: continue_branch's keywords and
+#: a continuation file's omitted keys (branch_file) read them. step, min_step and max_step
+#: are in units of the parameter's range |stop - start| [-], max_points a count [-].
+DEFAULTS = {"preset": "paper", "parameter": "frequency", "step": 0.01, "min_step": 1e-7,
+            "max_step": 0.05, "max_points": 2000, "period_doubling": "mark"}
+
+
+@dataclass(frozen=True)
+class ContinuationSpec:
+    """A checked continuation problem (:func:`check_continuation`), which
+    :func:`continue_branch` takes as it is.
+
+    Attributes
+    ----------
+    preset : str or None
+        Preset the fixed parameters start from (``None``: the paper's).
+    fixed : dict
+        Fixed parameters by name (SI units), as given, without ``steps_per_period``.
+    parameter : str
+        The continued parameter.
+    start, stop : float
+        The range, in the parameter's SI unit.
+    steps : int
+        Steps per forcing period, kept along the whole branch.
+    step, min_step, max_step : float
+        Initial, smallest and largest arclength step [-], relative to |stop - start|.
+    max_points : int
+        Budget of points on all branches [-].
+    switch : bool
+        True when the doubled branch is followed from each period doubling.
+    base : dict
+        The validated parameters at ``start`` and ``steps`` (SI units): the branch's first
+        point, resolved once.
+    """
+
+    preset: str | None
+    fixed: dict
+    parameter: str
+    start: float
+    stop: float
+    steps: int
+    step: float
+    min_step: float
+    max_step: float
+    max_points: int
+    switch: bool
+    base: dict
 
 
 class NoOrbitError(RuntimeError):
@@ -256,19 +300,22 @@ class _Problem:
         return point.tested
 
 
-def continue_branch(preset: str | None = "paper", parameter: str = "frequency",
+def continue_branch(preset: str | None | ContinuationSpec = DEFAULTS["preset"],
+                    parameter: str = DEFAULTS["parameter"],
                     start: float | None = None, stop: float | None = None, *,
                     step: float = DEFAULTS["step"], min_step: float = DEFAULTS["min_step"],
                     max_step: float = DEFAULTS["max_step"],
-                    max_points: int = DEFAULTS["max_points"], period_doubling: str = "mark",
-                    **parameters):
+                    max_points: int = DEFAULTS["max_points"],
+                    period_doubling: str = DEFAULTS["period_doubling"], **parameters):
     """Follow the branch of periodic orbits reached from rest at ``start`` as
     ``parameter`` runs to ``stop``, through folds, with its stability and bifurcations.
 
     Parameters
     ----------
-    preset : str or None
-        A preset name; ``None`` is the paper's.
+    preset : str, None or ContinuationSpec
+        A preset name; ``None`` is the paper's. Or a problem already checked
+        (:func:`check_continuation`, ``branch_file.load_continuation``), taken as it is:
+        then no other argument is given.
     parameter : str
         The continued parameter: any numeric model parameter (see ``PARAMETERS``).
     start, stop : float
@@ -303,17 +350,27 @@ def continue_branch(preset: str | None = "paper", parameter: str = "frequency",
     """
     from .datasets import branch_dataset
 
-    spec = check_continuation(preset, parameter, start, stop, step, min_step, max_step,
-                              max_points, period_doubling, parameters)
-    branch = _continue(**spec)
+    options = dict(parameter=parameter, step=step, min_step=min_step, max_step=max_step,
+                   max_points=max_points, period_doubling=period_doubling)
+    if not isinstance(preset, ContinuationSpec):
+        spec = check_continuation(preset, start=start, stop=stop, fixed=parameters, **options)
+    elif parameters or start is not None or stop is not None or any(
+            value != DEFAULTS[name] for name, value in options.items()):
+        # (a checked problem holds every option: another beside it would be ignored)
+        raise ParameterError("a ContinuationSpec is the whole problem: give no other "
+                             "argument beside it")
+    else:
+        spec = preset
+    branch = _continue(spec)
     return branch_dataset(branch, spec)
 
 
 def check_continuation(preset, parameter, start, stop, step, min_step, max_step, max_points,
-                       period_doubling, fixed: dict, prefix: str = "") -> dict:
-    """The checked continuation problem as keyword arguments of :func:`_continue` (bad
-    input raises ParameterError naming it, after ``prefix``, with its unit and allowed
-    range)."""
+                       period_doubling, fixed: dict, prefix: str = "") -> ContinuationSpec:
+    """The checked continuation problem, every value validated once here (bad input raises
+    ParameterError naming it, after ``prefix``, with its unit and allowed range): the
+    options in the units of :func:`continue_branch`, ``fixed`` the fixed parameters by
+    name (SI units)."""
     if not isinstance(parameter, str) or parameter not in PARAMETERS \
             or PARAMETERS[parameter].kind != "float":
         floats = [n for n, p in PARAMETERS.items() if p.kind == "float"]
@@ -360,21 +417,28 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
         steps = max(auto_steps_per_period(resolve_parameters(preset, **fixed,
                                                              **{parameter: float(v)}))
                     for v in samples)
+    at_steps = []
     for v in samples:  # (a value too stiff at that step is refused here, not mid-branch)
-        check_runnable(resolve_parameters(preset, **{**fixed, parameter: float(v),
-                                                     "steps_per_period": steps}))
-    return dict(preset=preset, fixed={k: v for k, v in fixed.items()
-                                      if k != "steps_per_period"},
-                parameter=parameter, start=ends["start"], stop=ends["stop"], steps=int(steps),
-                step=float(step), min_step=float(min_step), max_step=float(max_step),
-                max_points=max_points, switch=period_doubling == "switch")
+        at_steps.append(resolve_parameters(preset, **{**fixed, parameter: float(v),
+                                                      "steps_per_period": steps}))
+        check_runnable(at_steps[-1])
+    return ContinuationSpec(
+        preset=preset, fixed={k: v for k, v in fixed.items() if k != "steps_per_period"},
+        parameter=parameter, start=ends["start"], stop=ends["stop"], steps=int(steps),
+        step=float(step), min_step=float(min_step), max_step=float(max_step),
+        max_points=max_points, switch=period_doubling == "switch",
+        base=at_steps[0])  # (samples[0] is start itself)
 
 
-def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_step,
-              max_points, switch) -> Branch:
-    """The branch from rest at ``start`` (and, with ``switch``, the doubled branches)."""
+def _continue(spec: ContinuationSpec) -> Branch:
+    """The branch from rest at ``spec.start`` (and, with ``spec.switch``, the doubled
+    branches)."""
     began = time.perf_counter()
-    p0 = resolve_parameters(preset, **fixed, **{parameter: start, "steps_per_period": steps})
+    preset, fixed, parameter, start, stop, steps = (spec.preset, spec.fixed, spec.parameter,
+                                                    spec.start, spec.stop, spec.steps)
+    step, min_step, max_step, max_points = (spec.step, spec.min_step, spec.max_step,
+                                            spec.max_points)
+    p0 = spec.base
     _engine.warm_up()
     results = solve(pack_points([p0]))
     status = int(results.metrics[0, METRIC.status])
@@ -417,7 +481,7 @@ def _continue(preset, fixed, parameter, start, stop, steps, step, min_step, max_
                              max_points - len(out.points))
         out.points += found
         out.stops.append(why)
-        if switch:
+        if spec.switch:
             for point in found:
                 if (point.bifurcation == list(BIFURCATIONS).index("period_doubling")
                         and 2 * point.period <= MAX_ORBIT_PERIOD):
@@ -577,4 +641,5 @@ def _estimate(problem: _Problem, point: _Point) -> None:
         point.error = float(halving_error(point.metrics, fine.metrics))
 
 
-__all__ = ["Branch", "NoOrbitError", "check_continuation", "continue_branch"]
+__all__ = ["Branch", "ContinuationSpec", "NoOrbitError", "check_continuation",
+           "continue_branch"]

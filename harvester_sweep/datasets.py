@@ -173,11 +173,11 @@ def write_netcdf(ds: xr.Dataset, path) -> None:
         raise
 
 
-def branch_dataset(branch, spec: dict) -> xr.Dataset:
+def branch_dataset(branch, spec) -> xr.Dataset:
     """A branch of orbits (:func:`harvester_sweep.continuation.continue_branch`) along
     ``point``, in the order followed.
 
-    ``spec`` is the checked problem (continuation.check_continuation). Variables: the
+    ``spec`` is the checked problem (a continuation.ContinuationSpec). Variables: the
     continued parameter (named after it, in its unit), the engine's metrics but
     ``status`` and ``periods_run``, ``error_estimate``, the Floquet multipliers and
     ``spectral_radius``, ``stable``, ``bifurcation`` (CF flags), ``branch``,
@@ -189,7 +189,7 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
     from .outputs import ENGINE_METRICS
 
     points = branch.points
-    parameter = spec["parameter"]
+    parameter = spec.parameter
     lam = np.array([pt.lam for pt in points])
     mult = sorted_multipliers(np.array([pt.monodromy for pt in points]))
     radius = np.abs(mult[:, 0])
@@ -233,22 +233,22 @@ def branch_dataset(branch, spec: dict) -> xr.Dataset:
     coords = {"point": ("point", np.arange(len(points)), {
         "units": "1", "long_name": "point along the branches, in the order followed"}),
         **multiplier_coordinate(mult.shape[1])}
-    fixed = resolve_parameters(spec["preset"], **spec["fixed"],
-                               **{parameter: spec["start"], "steps_per_period": spec["steps"]})
+    fixed = resolve_parameters(spec.preset, **spec.fixed,
+                               **{parameter: spec.start, "steps_per_period": spec.steps})
     fixed.pop(parameter)
     ds = xr.Dataset(data, coords=coords)
-    ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec["preset"] or "paper", [])))
+    ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec.preset or "paper", [])))
     ds.attrs.update({
         "title": "harvester_sweep branch of periodic orbits of a piezoelectric harvester with "
                  "a Hertz stop",
-        "preset": spec["preset"] or "paper",
+        "preset": spec.preset or "paper",
         "continued_parameter": parameter,
-        "start": spec["start"], "stop": spec["stop"],
+        "start": spec.start, "stop": spec.stop,
         "range_units": PARAMETERS[parameter].unit,
-        "step": spec["step"], "min_step": spec["min_step"], "max_step": spec["max_step"],
-        "max_points": spec["max_points"],
-        "steps_per_period": spec["steps"],
-        "period_doubling": "switch" if spec["switch"] else "mark",
+        "step": spec.step, "min_step": spec.min_step, "max_step": spec.max_step,
+        "max_points": spec.max_points,
+        "steps_per_period": spec.steps,
+        "period_doubling": "switch" if spec.switch else "mark",
         "ends": "; ".join(branch.stops),
         "run_time": branch.run_time, "run_time_units": "s",
     })

@@ -8,8 +8,8 @@ else :data:`CONTACT_PERIODS`) and, with contact, for the periods the slowest tra
 needs to come within ``orbits.NEAR`` of the orbit (at most ``max_periods``). Contact only
 adds damping, and a point continued from its neighbour starts closer to its orbit, so this
 is rather an upper estimate. The run time divides by a typical rate of the lane engine
-(:data:`SWEEP_STEPS_PER_SECOND`); the progress bar's ETA, from the measured rate, takes over
-once the sweep runs.
+(:data:`harvester_sweep.timescales.STEPS_PER_SECOND`, the package's one run-time rate); the
+progress bar's ETA, from the measured rate, takes over once the sweep runs.
 """
 
 from __future__ import annotations
@@ -24,10 +24,6 @@ from . import timescales
 from .linear import linear_response
 from .orbits import NEAR, D
 
-#: RK4 steps a thread of the lane engine takes per second on a sweep, for estimates only:
-#: the benchmark grids run at 1e8-2.5e8 a thread on AMD Zen 3 (benchmarks/results/), and
-#: Zen 1's 128-bit vector units take about half that.
-SWEEP_STEPS_PER_SECOND = 1e8
 #: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
 LONG_RUN_SECONDS = 3600.0
 #: Periods of a point's own step the solver runs besides the motion, in Newton's iterates
@@ -66,7 +62,7 @@ class RunEstimate:
     @property
     def seconds(self) -> float:
         """Expected wall time [s] on ``threads`` threads."""
-        return self.steps / (SWEEP_STEPS_PER_SECOND * self.threads)
+        return self.steps / (timescales.STEPS_PER_SECOND * self.threads)
 
     @property
     def long(self) -> bool:

@@ -26,8 +26,14 @@ RK4_STABILITY = 2.5
 #: Measured on the paper scene (benchmarks/convergence.py): relative error of the metrics
 #: ~ ERROR_CONSTANT (h w_fast)^4 with contact switches located.
 ERROR_CONSTANT = 2e-4
-#: Single-thread kernel speed used for run-time estimates in messages [steps/s].
-STEPS_PER_SECOND = 2.5e7
+#: RK4 steps a thread of the lane engine takes per second, its lanes filled by a sweep's
+#: points [steps/s]: the one rate every run-time estimate divides by (a sweep's before it
+#: starts, run_estimate; a refused point's in its message, run_time_estimate). Estimates
+#: only, never a decision about a result. The benchmark grids run at 1e8-2.5e8 a thread on
+#: AMD Zen 3 (benchmarks/results/), Zen 1's 128-bit vector units take about half that; at
+#: 1e8 the 1e6-point example is estimated at 4.2 min on two threads, and took 4.6 (AVX-512)
+#: and 8.0 min (AVX2) (docs/benchmarks.md).
+STEPS_PER_SECOND = 1e8
 #: Periods a run typically needs to settle, for run-time estimates in messages.
 TYPICAL_PERIODS = 150
 
@@ -171,7 +177,8 @@ def stability_steps(p: dict) -> tuple[int, str]:
 
 
 def run_time_estimate(steps_per_period: int) -> float:
-    """Rough single-thread run time of one point [s]."""
+    """Rough run time [s] of one point at ``steps_per_period`` among a sweep's, on one
+    thread: TYPICAL_PERIODS periods at STEPS_PER_SECOND."""
     return steps_per_period * TYPICAL_PERIODS / STEPS_PER_SECOND
 
 

@@ -1,0 +1,135 @@
+"""Each analysis checks its input once: the command line hands the spec its reader checked
+to the analysis, which takes it as it is; each default is written in one place; one rate
+drives every run-time estimate."""
+
+from __future__ import annotations
+
+import inspect
+import re
+
+import pytest
+
+from harvester_sweep import (
+    basin_file,
+    basin_map,
+    basins,
+    branch_file,
+    continuation,
+    continue_branch,
+    sweep_file,
+    timescales,
+)
+from harvester_sweep.cli import main
+from harvester_sweep.packing import refusal
+from harvester_sweep.parameters import ParameterError, resolve_parameters
+from harvester_sweep.run_estimate import estimate
+
+
+class _Stop(Exception):
+    """Raised in place of the integration: these tests look at what comes before it."""
+
+
+def _counting(monkeypatch, function, *modules):
+    """Replace ``function`` (by its name) in each of ``modules`` that binds it by a wrapper
+    that counts its calls; the list of the calls' arguments."""
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append((args, kwargs))
+        return function(*args, **kwargs)
+
+    for module in modules:
+        monkeypatch.setattr(module, function.__name__, counted, raising=False)
+    return calls
+
+
+def test_run_reads_and_checks_the_sweep_file_once(tmp_path, monkeypatch):
+    sweep = tmp_path / "s.toml"
+    sweep.write_text('preset = "paper"\n[parameters]\nsteps_per_period = 512\n'
+                     '[grid]\nfrequency = [140.0, 150.0]\n[sweep]\noutputs = ["power"]\n')
+    reads = _counting(monkeypatch, sweep_file.read_toml, sweep_file)
+    assert main(["run", str(sweep), "--output", str(tmp_path / "s.nc"), "--quiet"]) == 0
+    assert len(reads) == 1, reads
+
+
+def test_continue_checks_its_file_once(tmp_path, monkeypatch):
+    spec = tmp_path / "c.toml"
+    spec.write_text('[parameters]\ngap = 1e-6\n[continuation]\nstart = 300.0\nstop = 210.0\n')
+    checks = _counting(monkeypatch, continuation.check_continuation, continuation, branch_file)
+    taken = []
+
+    def stop(spec):
+        taken.append(spec)
+        raise _Stop
+
+    monkeypatch.setattr(continuation, "_continue", stop)
+    with pytest.raises(_Stop):
+        main(["continue", str(spec), "--output", str(tmp_path / "c.nc")])
+    assert len(checks) == 1, checks
+    # the problem continued is the file's, its first point the parameters at the start
+    (problem,) = taken
+    assert (problem.parameter, problem.start, problem.stop) == ("frequency", 300.0, 210.0)
+    assert problem.base == resolve_parameters("paper", gap=1e-6, frequency=300.0,
+                                              steps_per_period=problem.steps)
+
+
+def test_basins_checks_its_file_once(tmp_path, monkeypatch):
+    spec = tmp_path / "b.toml"
+    spec.write_text('[parameters]\nsteps_per_period = 512\n[grid]\n'
+                    'frequency = [100.0, 245.0]\n[basins]\nsamples = 8\n')
+    axes = _counting(monkeypatch, sweep_file.axis, basins, basin_file)
+    taken = []
+
+    def stop(points, *args):
+        taken.append(points)
+        raise _Stop
+
+    monkeypatch.setattr(basins, "_solve", stop)
+    with pytest.raises(_Stop):
+        main(["basins", str(spec), "--output", str(tmp_path / "b.nc"), "--quiet"])
+    assert len(axes) == 1, axes  # one grid axis, read once
+    assert taken == [[resolve_parameters("paper", steps_per_period=512, frequency=f)
+                      for f in (100.0, 245.0)]]
+
+
+def test_a_file_and_a_call_take_the_same_defaults():
+    """An option left out of a file has the value it has when left out of the call."""
+    branch = branch_file.load_continuation({"continuation": {"start": 300.0, "stop": 250.0}})
+    call = inspect.signature(continue_branch).parameters
+    assert branch.preset == call["preset"].default
+    assert branch.parameter == call["parameter"].default
+    for name in ("step", "min_step", "max_step", "max_points"):
+        assert getattr(branch, name) == call[name].default, name
+    assert branch.switch == (call["period_doubling"].default == "switch")
+    grid = basin_file.load_basins({})
+    call = inspect.signature(basin_map).parameters
+    for name in ("preset", "samples", "seed", "box", "shock"):
+        assert getattr(grid, name) == call[name].default, name
+
+
+def test_a_checked_spec_is_taken_whole_or_refused():
+    """Beside a checked spec, any other argument would be ignored: it is refused."""
+    branch = branch_file.load_continuation({"continuation": {"start": 300.0, "stop": 250.0}})
+    for kwargs in ({"gap": 2e-6}, {"max_points": 10}, {"parameter": "gap"}):
+        with pytest.raises(ParameterError, match="ContinuationSpec is the whole problem"):
+            continue_branch(branch, **kwargs)
+    grid = basin_file.load_basins({"grid": {"frequency": [100.0]}})
+    for kwargs in ({"samples": 5}, {"steps_per_period": 512}, {"preset": "strong_coupling"}):
+        with pytest.raises(ParameterError, match="BasinSpec is the whole problem"):
+            basin_map(grid, **kwargs)
+
+
+def test_one_rate_drives_every_run_time_estimate(monkeypatch):
+    """A sweep's estimate and a refused point's message scale alike with the one rate."""
+    spec = sweep_file.load_sweep({"grid": {"frequency": [140.0, 150.0]}})
+    stiff = resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
+
+    def seconds():
+        said = re.search(r"about (\d+) s per point", refusal(stiff))
+        return estimate(spec, spec.n_points, 1).seconds, float(said.group(1))
+
+    sweep_before, point_before = seconds()
+    monkeypatch.setattr(timescales, "STEPS_PER_SECOND", timescales.STEPS_PER_SECOND / 1000)
+    sweep_after, point_after = seconds()
+    assert sweep_after == pytest.approx(1000 * sweep_before)
+    assert point_after == pytest.approx(1000 * point_before, rel=0.3)  # (said in whole s)
