@@ -34,7 +34,8 @@ import numpy as np
 import xarray as xr
 from tqdm import tqdm
 
-from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, SERIES, STATE, STATUS, record_series
+from . import period_map
+from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, SERIES, STATE, STATUS
 from .datasets import grid_coordinates, run_attributes
 from .linear import linear_response
 from .outputs import OUTPUTS, metric_index
@@ -349,7 +350,7 @@ def _shocked(one, when, sign, shock):
     for i, row in enumerate(one.rows):
         n = int(row[PARAM.steps])
         period = max(int(rest.metrics[i, METRIC.orbit_period]), 1)
-        orbit = record_series(row, rest.finals[i], period)
+        orbit = period_map.record(row, rest.finals[i], period)
         step = np.minimum((when * period * n).astype(np.int64), period * n - 1)
         state = np.repeat(rest.finals[i][None], len(when), axis=0)
         state[:, :3] = orbit[step, :3]
@@ -379,7 +380,7 @@ def _attractors(results, part: slice, rows: np.ndarray) -> dict:
     while left.size:
         head = left[0]
         p = period[head]
-        orbit = record_series(rows[head], finals[head], p)[:, :3]
+        orbit = period_map.record(rows[head], finals[head], p)[:, :3]
         # the orbit's p states at the forcing phase of each start left
         at = (section[left] - section[head]) % n
         states = orbit[at[:, None] + n * np.arange(p)[None, :]]

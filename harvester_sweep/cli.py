@@ -154,9 +154,9 @@ def _main(args) -> int:
 
 
 def _announce_compilation() -> None:
-    from ._engine import cache_warm
+    from .period_map import engine_ready
 
-    if not cache_warm():
+    if not engine_ready():
         print("harvester-sweep: compiling the RK4 kernel into numba's on-disk cache (first "
               "run only, 1-2 minutes)", file=sys.stderr, flush=True)
 

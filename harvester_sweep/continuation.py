@@ -50,14 +50,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import _engine
-from ._engine import MAX_ORBIT_PERIOD, METRIC, N_STROBE, NO_STOP, PARAM, STATUS
+from . import period_map
+from ._engine import MAX_ORBIT_PERIOD, METRIC, NO_STOP, PARAM, STATUS
+from .accuracy import halving_error
 from .linear import linear_response
-from .orbits import (PERTURBATION, ROUNDING, copies_width, halving_error, monodromy,
-                     orbit_scales, perturbed_copies, state_size)
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PARAMETERS, ParameterError, check_names, resolve_parameters
+from .period_map import PERTURBATION, ROUNDING, orbit_scales, state_size
 from .results import solve
 from .timescales import auto_steps_per_period
 
@@ -176,7 +176,7 @@ class _Problem:
         self.range = hi - lo
         self.steps = steps
         self.scale = scale
-        self.D = len(scale)  # components of the period map (orbits.state_size)
+        self.D = len(scale)  # components of the period map (period_map.state_size)
         self.tolerance = base["settle_tolerance"]
         self._rows = {}
 
@@ -195,46 +195,44 @@ class _Problem:
     def lam(self, z) -> float:
         return self.lo + z[self.D] * self.range
 
-    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True,
-                 strobes=None):
+    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True):
         """P^p at z and, with ``jacobian``, the scaled [M - I, dP/dlam]: the end state (4,),
         the metric row, the monodromy (3, 3) and the scaled Jacobian (3, 4); None where the
-        run diverged or the value is outside the parameter's range. ``strobes``, when
-        given, (1, p, 3) receives the states y(T) .. y(pT) of the unperturbed run."""
+        run diverged or the value is outside the parameter's range."""
         lam = self.lam(z)
         dlam = PERTURBATION * self.range
-        width = copies_width("spread", self.D) if jacobian else 1  # (lanes at lam)
         try:
-            rows = [self.row(lam, steps)] * width
-            if jacobian:
-                rows += [self.row(lam + dlam, steps)]
+            row = self.row(lam, steps)
+            shifted = self.row(lam + dlam, steps) if jacobian else None
         except ParameterError:
             return None
-        rows = np.array(rows)
-        rows[:, PARAM.max_periods] = period
-        rows[1:, PARAM.book] = 0.0  # (the perturbed runs' end states alone are read)
         state = carry.copy()
         state[:self.D] = z[:self.D] * self.scale
-        states = perturbed_copies(state[None, :], self.scale[None, :], "spread") \
-            if jacobian else state[None, :]
-        states = np.concatenate([states, states[:1]])[:len(rows)]  # (the lane at lam + dlam)
-        metrics = np.empty((len(rows), len(METRIC)))
-        samples = np.empty((len(rows), 0 if strobes is None else strobes.shape[1], N_STROBE))
-        _engine.run_points(rows, states, metrics, samples, settle=False)
-        if strobes is not None:
-            strobes[:] = samples[:1]
-        if not (np.all(metrics[:, METRIC.status] != STATUS.diverged)
-                and np.all(np.isfinite(metrics[:, METRIC.power]))
-                and np.all(np.isfinite(states[:, :self.D]))):
-            return None
+        batch = period_map.Batch(self.D, 0)
         if not jacobian:
-            return states[0], metrics[0], None, None
-        m = monodromy(states[None, :width], self.scale[None, :])[0]
+            batch.add(row, state[None, :], period)
+            (at,) = batch.run()
+            return (at.ends[0], at.metrics[0], None, None) if at.ok[0] else None
+        batch.add(row, state[None, :], period, copies="spread", scale=self.scale[None, :])
+        # (the perturbed runs' end states alone are read)
+        batch.add(shifted, state[None, :], period, book=False)
+        at, beside = batch.run()
+        if not (at.ok[0] and beside.ok[0]):
+            return None
+        m = at.jacobian[0]
         scaled = np.empty((self.D, self.D + 1))
         scaled[:, :self.D] = m * self.scale[None, :] / self.scale[:, None] - np.eye(self.D)
-        scaled[:, self.D] = ((states[-1, :self.D] - states[0, :self.D]) / dlam
+        scaled[:, self.D] = ((beside.ends[0, :self.D] - at.ends[0, :self.D]) / dlam
                              * self.range / self.scale)
-        return states[0], metrics[0], m, scaled
+        return at.ends[0], at.metrics[0], m, scaled
+
+    def phases(self, z, period: int, carry: np.ndarray) -> np.ndarray:
+        """The states y(T) .. y(pT) (p, D) of the run from z, at the branch's step."""
+        state = carry.copy()
+        state[:self.D] = z[:self.D] * self.scale
+        batch = period_map.Batch(self.D, period)
+        batch.add(self.row(self.lam(z), self.steps), state[None, :], period)
+        return batch.run()[0].strobes[0]
 
     def correct(self, predicted, tangent, period: int, carry, steps=None, fixed=None):
         """Newton on [F(z); tangent . (z - predicted)] = 0 from ``predicted``; a _Point
@@ -439,7 +437,7 @@ def _continue(spec: ContinuationSpec) -> Branch:
     step, min_step, max_step, max_points = (spec.step, spec.min_step, spec.max_step,
                                             spec.max_points)
     p0 = spec.base
-    _engine.warm_up()
+    period_map.warm_up()
     results = solve(pack_points([p0]))
     status = int(results.metrics[0, METRIC.status])
     if status != STATUS.settled:
@@ -499,9 +497,8 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
     stalls or spends ``budget``; and why it ended."""
     points = [head]
     a, ds = head, step
-    phases = np.empty((1, head.period, N_STROBE))  # the head's orbit at its p phases
-    problem.evaluate(head.z, head.period, head.state, problem.steps, False, phases)
-    phases = np.concatenate([phases[0, :, :problem.D] / problem.scale,
+    phases = problem.phases(head.z, head.period, head.state)  # the head's orbit, p phases
+    phases = np.concatenate([phases / problem.scale,
                              np.full((head.period, 1), head.z[problem.D])], axis=1)
     while len(points) < budget:
         predicted = a.z + ds * a.tangent

@@ -185,8 +185,8 @@ def branch_dataset(branch, spec) -> xr.Dataset:
     parameters with their units, the continuation's range and options, why each branch
     ended and the run time [s].
     """
-    from .orbits import sorted_multipliers
     from .outputs import ENGINE_METRICS
+    from .period_map import sorted_multipliers
 
     points = branch.points
     parameter = spec.parameter

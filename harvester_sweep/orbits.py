@@ -21,7 +21,7 @@ How, and why (docs/numerics.md, "Periodic orbits"):
   where that monodromy is still the map's: no lane of its run touched a stop (the map is
   affine off the stop), or the iterate moved less than ``CHORD`` from where it was taken.
   Where the run Newton starts from is expected to stay clear of the stops (the last run
-  did; from rest, the motion without the stops says so: _engine.free_extent), its first
+  did; from rest, the motion without the stops says so: period_map.free_extent), its first
   iterate is a chord step too, with the contact-free map's monodromy in closed form
   (:func:`free_monodromy`); if it touched after all, it is run again with copies.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
@@ -59,19 +59,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _engine
-from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, N_STROBE, NO_STOP, PARAM, STATE, STATUS
+from . import period_map
+from ._engine import MAX_ORBIT_PERIOD, METRIC, NO_STOP, PARAM, STATE, STATUS
+from .acceptance import (
+    NEAR,
+    never_reaches,
+    norm,
+    on_its_way,
+    reach,
+    reaches_a_stop,
+)
+from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
+from .period_map import (
+    PERTURBATION,
+    ROUNDING,
+    D,
+    free_monodromy,
+    orbit_scales,
+    sane,
+    sorted_multipliers,
+    state_size,
+)
 
-#: Forward-difference step of the monodromy, relative to each component's scale [-].
-PERTURBATION = 1e-6
-#: Central-difference step of the monodromy an orbit is judged on and reports, relative to
-#: each component's scale. The period map of a switched contact bends sharply near some
-#: orbits (grazing): forward differences at PERTURBATION put a spectral radius 0.016 off,
-#: and two orbits' 1.0036 and 1.0003 at 0.9963 and 0.9985, stable; central ones at 1e-6
-#: still err by up to 0.02 where the map bends within that scale, and at this step agree
-#: with those at 1e-8 to 1.2e-5 at every settled point of the two 64 x 64 grids but one,
-#: whose map is not smooth at any step tried (docs/numerics.md) [-].
-CENTRAL = 1e-7
 #: A Newton iterate this near the one its monodromy was taken at (relative to the scales)
 #: reuses that monodromy (a chord step: its centre lane alone): the monodromy changes by
 #: no more than its own forward differences span [-].
@@ -83,22 +92,13 @@ CHORD = PERTURBATION
 LAST_STEP = 1e-3
 #: Newton iterations of one attempt before it is given up [-].
 MAX_NEWTON = 8
-#: A trajectory's state is in the linear regime of a fixed point when the monodromy
-#: predicts the next p periods to this fraction of their distance from it [-].
-LINEAR_REGIME = 0.1
-#: ... and its first run's monodromy does not expand: a spectral radius above this at the
-#: attempt's start says the motion there is not in the linear regime of a stable orbit (a
+#: A spectral radius above this of an attempt's first run's monodromy says the motion
+#: at the attempt's start is not in the linear regime of a stable orbit (a
 #: chaotic motion, or one passing near an orbit it does not reach), and the attempt ends
 #: at once rather than pay the iterations to an orbit it could not take
 #: (docs/numerics.md) [-].
 EXPANDING = 1.0
-#: ... and within this distance of it, relative to the orbit's amplitudes: a guard, as one
-#: look at the linear regime is a heuristic and near a fold the basin of another
-#: attractor lies close to the orbit. It costs the periods the motion takes to come this
-#: near; at 1e-3 it cost a third of the motion of the sweeps' points with contact and took
-#: no other attractor on the benchmark grids (docs/numerics.md) [-].
-NEAR = 0.1
-#: ... and an attempt's iterates whose orbit has contact end once Newton is within this
+#: An attempt's iterates whose orbit has contact end once Newton is within this
 #: of it (relative to the scales, each step at most half the last) and it lies beyond
 #: NEAR of the motion's state at the attempt's start, by more than the step: that orbit
 #: could not be taken. A first run that does not touch (a contact the motion makes only now
@@ -106,16 +106,9 @@ NEAR = 0.1
 #: they converged to them, six runs an attempt, again at every attempt of a motion that
 #: never settles (docs/numerics.md) [-].
 SETTLING = 1e-2
-#: ... and within this share of the orbit's margin from grazing a stop (reach) [-].
-GRAZING = 1.0
-#: Maps of p periods the monodromy's prediction is followed to see that it stays NEAR [-].
-AHEAD = 16
 #: Steps per period of the linear motion that guesses whether a motion no run has taken
-#: yet will touch a stop in its first period (_engine.free_extent) [-].
+#: yet will touch a stop in its first period (period_map.free_extent) [-].
 GUESS_STEPS = 64
-#: Margin of the no-contact proof, relative to the bound, for the step's own error (RK4
-#: and the Hermite interpolant are far below it at any step the engine takes) [-].
-PROOF_MARGIN = 1e-3
 #: The first chunk of trajectory integrated after a failed attempt [periods].
 FIRST_CHUNK = 8
 #: The most periods of trajectory one round runs for a point [periods]: a longer chunk
@@ -127,19 +120,6 @@ SLICE = 64
 LOCATED = 0.05
 #: Runs of the error estimate at twice the steps before it is given up [-].
 ESTIMATE_RUNS = 4
-#: Re-solves at a finer step for the accuracy target [-].
-REFINEMENTS = 3
-#: A re-solve whose error estimate fell slower than this order of the step asks for
-#: twice the steps next, not for the fourth order's: near grazing the estimate wanders
-#: about its trend from one step to the next (docs/numerics.md) [-].
-SLOW_ORDER = 2.0
-#: Newton's floor from rounding: a correction below this many rounding units of the
-#: period map, times the conditioning of I - M, is converged.
-ROUNDING = 100 * np.finfo(float).eps
-
-#: Components of the period map's state with a rigid stop: x [m], v [m/s], V [V]; a
-#: moving stop adds its own displacement [m] and velocity [m/s] (N_STROBE in all).
-D = N_RIGID
 SAMPLES = MAX_ORBIT_PERIOD + 1  # stroboscopic samples read back from each run
 
 # what a point is doing (the phase of :class:`_Points`)
@@ -222,148 +202,6 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     return pts.result(samples)
 
 
-def state_size(rows) -> int:
-    """Components of the period map of packed rows (n, len(PARAM)) solved together: D, or
-    N_STROBE where one of them has a moving stop."""
-    return N_STROBE if (np.asarray(rows)[:, PARAM.stop_ratio] > 0).any() else D
-
-
-def orbit_scales(rows, x, v_peak, size=D):
-    """Component scales of orbits of displacement amplitude ``x`` [m] and peak voltage
-    ``v_peak`` [V] (packed rows (..., len(PARAM))): x [m], w x [m/s], the larger of v_peak
-    and the voltage of that amplitude [V], and for ``size`` N_STROBE the stop's x [m] and
-    w x [m/s] (its motion is measured against the tip's)."""
-    w_x = rows[..., PARAM.v_per_x] * x
-    scales = [x, w_x, np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)]
-    return np.stack(scales + [x, w_x][:size - D], axis=-1)
-
-
-def free_monodromy(rows, steps, periods):
-    """The monodromy (n, 3, 3) of ``periods`` (n,) periods at ``steps`` (n,) steps per
-    period of packed rows (n, len(PARAM)) where the motion stays clear of the stops: the
-    engine's contact-free RK4 step matrix to the power of the steps (_engine.monodromy)."""
-    out = np.empty((len(rows), 3, 3))
-    _engine.free_monodromy(np.ascontiguousarray(rows), np.asarray(steps, dtype=float),
-                           np.asarray(periods, dtype=np.int64), out)
-    return out
-
-
-def reaches_a_stop(rows, high, low):
-    """Whether motions between x = ``low`` and ``high`` [m] (n,) come to a stop of packed
-    rows (n, len(PARAM)): to the gap of an upper stop, or to a lower one (a NaN extent
-    counts as reaching)."""
-    return (rows[:, PARAM.khm] > 0) & ~(high < rows[:, PARAM.gap]) \
-        | (rows[:, PARAM.lower_khm] > 0) & ~(low > -rows[:, PARAM.lower_gap])
-
-
-def on_its_way(t0, t1, q, y, jac, scale, floor, near=NEAR):
-    """Whether motions at ``t0`` (n, D), ``q`` (n,) maps of the period map later at ``t1``,
-    are on their way to its fixed points ``y`` (n, D) of monodromy ``jac`` (n, D, D), in
-    components relative to ``scale`` (n, D), with Newton's floor ``floor`` (n,) [-].
-
-    Yes where ``t0`` is on the fixed point (within the floor), or where it is within
-    ``near`` (n,) of it (NEAR, or nearer: :func:`reach`), the monodromy predicts ``t1 - y``
-    from ``t0 - y`` to LINEAR_REGIME of its size, and the prediction from ``t1`` for AHEAD
-    more maps stays within NEAR, where the linear regime was seen to hold. (A motion may
-    first move away from a stable orbit, as one of a non-normal monodromy does: on its way
-    too, if it stays near.)
-    """
-    d0 = _norm(t0 - y, scale)
-    d1 = _norm(t1 - y, scale)
-    predicted = t0 - y
-    for k in range(int(q.max(initial=0))):
-        predicted = np.where((k < q)[:, None], np.einsum("nij,nj->ni", jac, predicted),
-                             predicted)
-    linear = _norm(t1 - y - predicted, scale) <= LINEAR_REGIME * d1 + floor
-    ahead = np.empty((AHEAD,) + y.shape)
-    ahead[0] = np.einsum("nij,nj->ni", jac, t1 - y)
-    for k in range(1, AHEAD):
-        ahead[k] = np.einsum("nij,nj->ni", jac, ahead[k - 1])
-    stays = (d1 <= NEAR) & np.all(_norm(ahead, scale) <= NEAR, axis=0)
-    way = (d0 <= near) & linear & stays & (d0 > floor)
-    return (d0 <= floor) | way
-
-
-def reach(m, scale):
-    """How near a motion must come to orbits of metric rows ``m`` (n, len(METRIC)) to be
-    in their linear regime, relative to the component scales ``scale`` (n, D) [-]: NEAR,
-    or nearer an orbit that comes near grazing a stop (GRAZING times the margin).
-
-    The period map is smooth only as long as the motion makes the orbit's contacts and no
-    other: a motion farther from the orbit than the top of one of its swings is from the
-    stop (``near_miss``) may touch where it does not, and one farther than the overshoot
-    its slowest impact would carry a harmonic swing beyond the gap, 0.5 (v_imp / (w x))^2
-    of the amplitude x (``approach_velocity_min``), may miss that impact. A stable orbit
-    that grazes is then the attractor of no motion beyond that margin."""
-    with np.errstate(invalid="ignore"):
-        miss = m[:, METRIC.near_miss] / scale[:, 0]
-        overshoot = 0.5 * (m[:, METRIC.approach_velocity_min] / scale[:, 1]) ** 2
-    margin = np.fmin(miss, overshoot)
-    return np.where(margin >= 0, np.minimum(GRAZING * margin, NEAR), NEAR)
-
-
-#: The perturbed copies of a monodromy, by kind: each component's moves, relative to its
-#: scale, in the order the copies follow their state: forward differences, central ones,
-#: and the spread copies whose median slope steps over a jump of the map (monodromy) [-].
-COPIES = {"forward": (PERTURBATION,), "central": (CENTRAL, -CENTRAL),
-          "spread": (CENTRAL, -CENTRAL, 2 * CENTRAL, -2 * CENTRAL)}
-
-
-def copies_width(kind, D):
-    """Lanes of a state and its perturbed copies of ``kind`` (COPIES) in D components."""
-    return 1 + D * len(COPIES[kind])
-
-
-def perturbed_copies(states, scale, kind="forward"):
-    """Each state (n, len(STATE)) followed by its copies of ``kind`` (COPIES), each moved
-    along one of its first D components by a move times ``scale`` (n, D), the D
-    components in turn for each move: (n * copies_width(kind, D), len(STATE))
-    (D = scale.shape[1])."""
-    D = scale.shape[1]
-    n = len(states)
-    moves = COPIES[kind]
-    width = copies_width(kind, D)
-    out = np.repeat(states, width, axis=0).reshape(n, width, states.shape[1])
-    for k, move in enumerate(moves):
-        for c in range(D):
-            out[:, 1 + k * D + c, c] += move * scale[:, c]
-    return out.reshape(-1, states.shape[1])
-
-
-def monodromy(ends, scale):
-    """The monodromy matrices (n, D, D) from the end states (n, width, >= D) of the runs
-    of :func:`perturbed_copies` with the same ``scale`` (n, D), the kind of copies told by
-    their width: by forward differences, by central ones, or (spread) by the median of the
-    four slopes between the five states along each component."""
-    D = scale.shape[-1]
-    e = ends[..., :D]
-    if e.shape[1] == copies_width("spread", D):
-        # The RK4 map with located switches jumps by about its own error where a switch
-        # crosses a step's end: a slope across such a jump is far off, the other three
-        # are near the derivative (the median, to the first order in the step)
-        row = [e[:, 3 * D + 1:], e[:, D + 1:2 * D + 1], np.repeat(e[:, :1], D, axis=1),
-               e[:, 1:D + 1], e[:, 2 * D + 1:3 * D + 1]]  # at -2h, -h, 0, h, 2h
-        slopes = np.sort(np.diff(np.stack(row), axis=0), axis=0)
-        diff, h = (slopes[1] + slopes[2]) / 2, CENTRAL * scale
-    elif e.shape[1] == copies_width("central", D):
-        diff, h = (e[:, 1:D + 1] - e[:, D + 1:]) / 2, CENTRAL * scale
-    else:
-        diff, h = e[:, 1:] - e[:, :1], PERTURBATION * scale
-    return diff.transpose(0, 2, 1) / h[:, None, :]
-
-
-def sorted_multipliers(jacobians):
-    """Floquet multipliers (n, 3) of monodromy matrices (n, 3, 3), largest modulus first."""
-    mult = np.linalg.eigvals(jacobians)
-    order = np.argsort(-np.abs(mult), axis=-1, kind="stable")
-    return np.take_along_axis(mult, order, axis=-1)
-
-
-def _norm(d, scale):
-    """Largest component of ``d`` (..., 3) relative to ``scale`` (..., 3)."""
-    return np.max(np.abs(d) / scale, axis=-1)
-
-
 class _Points:
     """The points of one solve, each a small state machine (its phase) advanced one round
     of engine runs at a time; all arrays are indexed by point."""
@@ -411,9 +249,7 @@ class _Points:
         # first period says whether it will)
         self.touched = np.zeros(n, bool)
         if self.D == D:
-            extent = np.empty((n, 2))
-            _engine.free_extent(np.ascontiguousarray(rows), np.ascontiguousarray(states),
-                                GUESS_STEPS, extent)
+            extent = period_map.free_extent(rows, states, GUESS_STEPS)
             self.touched = reaches_a_stop(rows, extent[:, 0], extent[:, 1])
         self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
         self.metrics = np.full((n, len(METRIC)), np.nan)
@@ -488,86 +324,61 @@ class _Points:
         returns the number of points that finished."""
         iterate = self.phase == _NEWTON
         copied = iterate & ~self.chord  # with the copies of the monodromy
+        forward = np.flatnonzero(copied & ~self.central)
         central = np.flatnonzero(copied & self.central)
-        blocks = [(b, kind, copies_width(kind, self.D))
-                  for b, kind in [(np.flatnonzero(copied & ~self.central), "forward"),
-                                  (central, "central")] if b.size]
         chord = np.flatnonzero(iterate & self.chord)
         transient = np.flatnonzero(self.phase == _TRANSIENT)
         estimate = np.flatnonzero(self.phase == _ESTIMATE)
-        owners = np.concatenate([np.repeat(b, w) for b, _, w in blocks]
-                                + [chord, transient, estimate])
-        rows = self.rows[owners].copy()
-        states = np.concatenate([perturbed_copies(self.y[b], self.scale[b], kind)
-                                 for b, kind, _ in blocks]
-                                + [self.y[chord], self.traj[transient], self.y[estimate]])
-        rows[:, PARAM.steps] = self.steps[owners]
-        rows[:, PARAM.max_periods] = self.p[owners]
-        k = sum(len(b) * w for b, _, w in blocks)
-        copies = np.arange(len(owners)) < k
-        start = 0
-        for b, _, w in blocks:
-            copies[start:start + len(b) * w:w] = False
-            start += len(b) * w
-        rows[copies, PARAM.book] = 0.0  # (their end states alone are read)
-        j = k + len(chord)
+        batch = period_map.Batch(self.D, SAMPLES)
+        blocks = [(b, kind) for b, kind in [(forward, "forward"), (central, "central")]
+                  if b.size]
+        for b, kind in blocks:
+            batch.add(self.rows[b], self.y[b], self.p[b], self.steps[b], kind, self.scale[b])
+        batch.add(self.rows[chord], self.y[chord], self.p[chord], self.steps[chord])
         # (no slice shorter than MAX_ORBIT_PERIOD unless the whole chunk is: see _chunk)
         left = self.left[transient]
-        rows[j:j + len(transient), PARAM.max_periods] = np.where(
-            left < SLICE + MAX_ORBIT_PERIOD, left, SLICE)
-        rows[j + len(transient):, PARAM.steps] *= 2
-        metrics = np.empty((len(owners), len(METRIC)))
-        strobes = np.empty((len(owners), SAMPLES, self.D))
+        batch.add(self.rows[transient], self.traj[transient],
+                  np.where(left < SLICE + MAX_ORBIT_PERIOD, left, SLICE), self.steps[transient])
+        batch.add(self.rows[estimate], self.y[estimate], self.p[estimate],
+                  2 * self.steps[estimate])
         # (the engine's steady-state test ends a piece of the motion that settles; it never
         # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer
         # than the SAMPLES periods the test waits for)
-        # (in this thread: a round is short, so that an interrupt is seen between rounds,
-        # and a kernel run in a thread of its own costs a new thread team each round)
-        _engine.run_points(rows, states, metrics, strobes, settle=True)
-        np.add.at(self.work, owners, metrics[:, METRIC.periods_run] * rows[:, PARAM.steps])
+        *copies, chords, transients, estimates = batch.run(settle=True)
+        for b, ev in zip([b for b, _ in blocks] + [chord, transient, estimate],
+                         copies + [chords, transients, estimates]):
+            self.work[b] += ev.work
         before = int((self.phase == _DONE).sum())
-        runs, start = [], 0
-        for b, kind, w in blocks:
-            runs.append(self._copies(b, metrics[start:start + len(b) * w],
-                                     states[start:start + len(b) * w],
-                                     strobes[start:start + len(b) * w:w], kind, w))
-            start += len(b) * w
+        for (b, kind), ev in zip(blocks, copies):
+            self._copies(b, ev, kind)
         # (in a re-solve at a finer step, a step by central differences is not compared
         # with the last one, by forward differences: near grazing that one can be several
         # times off. In a first solve a step that does not contract ends the attempt, as it
-        # did: there it also turns away orbits the motion does not reach, one of the 1e6
-        # sweep's among them, which the motion passes within 0.025 of)
+        # did: there it also turns away orbits the motion does not reach)
         self.central[central] = False
         resolved = central[self.refine[central] > 0]
         self.last[resolved] = np.inf
-        c = slice(k, k + len(chord))
-        chord_ok = _sane(metrics[c]) & np.all(np.isfinite(states[c, :self.D]), axis=1)
-        runs.append((metrics[c], states[c], strobes[c], self.newton_jacobian[chord], chord_ok))
-        self._after_newton(np.concatenate([b for b, _, _ in blocks] + [chord]),
+        runs = [(ev.metrics, ev.ends, ev.strobes, ev.jacobian, ev.ok) for ev in copies]
+        runs.append((chords.metrics, chords.ends, chords.strobes,
+                     self.newton_jacobian[chord], chords.ok))
+        self._after_newton(np.concatenate([b for b, _ in blocks] + [chord]),
                            *(np.concatenate(parts) for parts in zip(*runs)))
-        j = slice(k + len(chord), k + len(chord) + len(transient))
-        self._after_transient(transient, metrics[j], states[j], strobes[j])
-        j = slice(k + len(chord) + len(transient), None)
-        self._after_estimate(estimate, metrics[j], states[j])
+        self._after_transient(transient, transients.metrics, transients.ends,
+                              transients.strobes)
+        self._after_estimate(estimate, estimates.metrics, estimates.ends, estimates.ok)
         return int((self.phase == _DONE).sum()) - before
 
-    def _copies(self, idx, metrics, states, strobes, kind, width):
-        """The runs of points ``idx`` with their perturbed copies of ``kind``, ``width``
-        lanes each
-        (metrics and end states of every lane, strobes of the centre lanes): the centre
-        lanes' metrics, end states and strobes, the monodromy, and whether every lane ran
-        sane and finite."""
-        m = metrics.reshape(len(idx), width, len(METRIC))
-        f = states.reshape(len(idx), width, len(STATE))
-        ok = np.all(_sane(m), axis=1) & np.all(np.isfinite(f[:, :, :self.D]), axis=(1, 2))
+    def _copies(self, idx, ev, kind):
+        """Whether the runs of points ``idx`` with their copies of ``kind`` (an
+        Evaluation) took an affine map, and whether their monodromy is one to judge an
+        orbit on."""
         # (the copies book no extrema: their impacts alone say they stayed clear)
         r = self.rows[idx, None]
-        self.affine[idx] = ~self._touched(idx, m[:, 0]) & np.all(
-            ((r[..., PARAM.khm] == 0) | (m[:, 1:, METRIC.impacts_per_period] == 0))
-            & ((r[..., PARAM.lower_khm] == 0) | (m[:, 1:, METRIC.impacts_per_period_lower] == 0)),
-            axis=1)
+        self.affine[idx] = ~self._touched(idx, ev.metrics) & np.all(
+            ((r[..., PARAM.khm] == 0) | (ev.copy_metrics[..., METRIC.impacts_per_period] == 0))
+            & ((r[..., PARAM.lower_khm] == 0)
+               | (ev.copy_metrics[..., METRIC.impacts_per_period_lower] == 0)), axis=1)
         self.exact[idx] = self.affine[idx] | (kind != "forward")
-        return m[:, 0], f[:, 0], strobes, monodromy(f, self.scale[idx]), ok
 
     # -- Newton ------------------------------------------------------------------------
 
@@ -599,7 +410,7 @@ class _Points:
         self.strobes[first] = np.where(self.tested[first, None, None], self.strobes[first],
                                        strobes[trajectory])
         self.traj[tested] = self.y[tested]
-        diverged = trajectory & ~_sane(m)
+        diverged = trajectory & ~sane(m)
         if diverged.any():
             self._diverge(idx[diverged])
         ok = ~diverged & lanes_ok
@@ -619,7 +430,7 @@ class _Points:
             step[good] = scale[good] * np.einsum("nij,nj->ni", inverse,
                                                  residual[good] / scale[good])
             cond[good] = np.linalg.norm(inverse, ord=np.inf, axis=(1, 2))
-        size = np.where(good, _norm(step, scale), np.inf)
+        size = np.where(good, norm(step, scale), np.inf)
         floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
         converged = good & (size <= floor)
         # an orbit with contact is not taken from beyond NEAR of it: not when the first
@@ -629,7 +440,7 @@ class _Points:
         # come NEAR (from the monodromy at t), rather than pay the iterations. Nor when the
         # monodromy at t expands (EXPANDING): t is not in a stable orbit's linear regime
         touched = self._touched(idx, m)
-        distance = np.maximum(size, 0.5 * _norm(centre[:, :self.D] - y, scale))
+        distance = np.maximum(size, 0.5 * norm(centre[:, :self.D] - y, scale))
         # (a first run that touched a stop with the contact-free map's monodromy is run
         # again with copies, and judged then)
         recheck = trajectory & self.chord[idx] & self.affine[idx] & touched & ~diverged
@@ -651,7 +462,7 @@ class _Points:
         later = ~opening & ~trajectory & good & touched & ~converged \
             & (self.refine[idx] == 0) & (size <= SETTLING) & (size <= 0.5 * self.last[idx])
         if later.any():
-            d0 = _norm(self.t0[idx] - (y + step), scale)
+            d0 = norm(self.t0[idx] - (y + step), scale)
             away = later & (d0 - size > NEAR)
             if away.any():
                 radius[away] = np.max(np.abs(np.linalg.eigvals(jac[away])), axis=1)
@@ -724,7 +535,7 @@ class _Points:
         shorter = np.zeros(len(idx), dtype=np.int64)
         for d in range(int(p.max()) - 1, 0, -1):
             sample = strobes[np.arange(len(idx)), SAMPLES - 1 - (p - d).clip(0)]
-            closes = (d < p) & (p % d == 0) & (_norm(sample - y, scale) <= 10 * floor)
+            closes = (d < p) & (p % d == 0) & (norm(sample - y, scale) <= 10 * floor)
             shorter = np.where(closes, d, shorter)
         again = shorter > 0
         if again.any():
@@ -750,15 +561,7 @@ class _Points:
         free = (m[:, METRIC.impacts_per_period] == 0) & (xmax < r[:, PARAM.gap]) \
             & (m[:, METRIC.impacts_per_period_lower] == 0) & (xmin > -r[:, PARAM.lower_gap])
         e = self.t0[idx] - y
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cv = np.where(r[:, PARAM.thc] != 0, r[:, PARAM.thm] / r[:, PARAM.thc], 0.0)
-        bound = np.sqrt(e[:, 0] ** 2 + (e[:, 1] ** 2 + cv * e[:, 2] ** 2) / r[:, PARAM.wn2])
-        if self.D > D:  # a moving stop's own transient, bounded alike (k_s x_s^2 + m_s v_s^2)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                stop = np.sqrt(e[:, 3] ** 2 + e[:, 4] ** 2 / r[:, PARAM.stop_wn2])
-            bound = bound + np.where(r[:, PARAM.stop_ratio] > 0, stop, 0.0)
-        proved = (xmax + bound + PROOF_MARGIN * (np.abs(xmax) + bound) < r[:, PARAM.gap]) \
-            & (xmin - bound - PROOF_MARGIN * (np.abs(xmin) + bound) > -r[:, PARAM.lower_gap])
+        proved = never_reaches(r, xmax, xmin, e)
         linear = (r[:, PARAM.khm] == 0) & (r[:, PARAM.lower_khm] == 0)  # (no stop at all)
         free |= linear
         proved |= linear
@@ -786,7 +589,7 @@ class _Points:
         self._estimate(est)
         self._finish(t[~self.estimated[t]])
         # not taken: integrate on for about the periods the motion needs to come near
-        d0 = _norm(e, scale)
+        d0 = norm(e, scale)
         with np.errstate(divide="ignore"):  # (d0 = 0: no hint, below)
             hint = np.ceil(p[~taken] * np.log(near[~taken] / (2 * d0[~taken]))
                            / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
@@ -850,7 +653,7 @@ class _Points:
         self.traj[idx] = f
         self.metrics[idx] = m
         self.strobes[idx] = strobes
-        bad = ~_sane(m)
+        bad = ~sane(m)
         self._diverge(idx[bad])
         idx, strobes, m = idx[~bad], strobes[~bad], m[~bad]
         out = self.run[idx] >= self.rows[idx, PARAM.max_periods]
@@ -883,17 +686,16 @@ class _Points:
         self.phase[idx] = _ESTIMATE
         self.iteration[idx] = 0
 
-    def _after_estimate(self, idx, m, f):
+    def _after_estimate(self, idx, m, f, ok):
         """Quasi-Newton at twice the steps from the orbit, with its monodromy."""
         if not idx.size:
             return
-        ok = _sane(m) & np.all(np.isfinite(f[:, :self.D]), axis=1)
         a = np.eye(self.D) - np.where(ok[:, None, None], self.jacobian[idx], 0.0)
         step = np.zeros((len(idx), self.D))
         if ok.any():
             residual = f[ok, :self.D] - self.y[idx[ok], :self.D]
             step[ok] = np.linalg.solve(a[ok], residual[..., None])[..., 0]
-        size = np.where(ok, _norm(step, self.scale[idx]), np.inf)
+        size = np.where(ok, norm(step, self.scale[idx]), np.inf)
         with np.errstate(invalid="ignore"):
             change = np.where(ok, halving_error(self.metrics[idx], m), np.nan)
         # (or the run is near enough the orbit at twice the steps for the change it
@@ -918,17 +720,13 @@ class _Points:
         # the accuracy target: solve again at the step the fourth order asks for, or at
         # twice the steps after a re-solve whose estimate fell slower than SLOW_ORDER
         target = self.accuracy[c]
-        want = np.ceil(self.steps[c] * (self.errors[c] / target) ** 0.25 * 1.1 / 16) * 16
-        before, error = self.coarser[c].T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            order = np.log(error / self.errors[c]) / np.log(self.steps[c] / before)
-        slow = (self.refine[c] > 0) & ~(order >= SLOW_ORDER)
-        want = np.where(slow, 2 * self.steps[c], want)
+        want = refined_steps(self.steps[c], self.errors[c], target, self.coarser[c],
+                             self.refine[c])
         again = (np.isfinite(target) & (self.errors[c] > target) & (self.refine[c] < REFINEMENTS)
                  & (want <= self.max_steps[c]))
         r = c[again]
         self.coarser[r] = np.stack([self.steps[r], self.errors[r]], axis=1)
-        self.steps[r] = np.maximum(want[again], self.steps[r] + 16)
+        self.steps[r] = np.maximum(want[again], self.steps[r] + STEPS_QUANTUM)
         self.refine[r] += 1
         self.phase[r] = _NEWTON
         self.y[r, :self.D] += step[converged][again]  # the orbit at twice the steps: closer
@@ -984,16 +782,11 @@ class _Points:
                       self.orbit_steps.astype(np.int64), self.work.astype(np.int64))
 
 
-def _sane(m):
-    """Runs that neither diverged nor went beyond the divergence limit."""
-    return (m[..., METRIC.status] != STATUS.diverged) & np.isfinite(m[..., METRIC.power])
-
-
 def _orbit_period(strobes, scale):
     """The orbit period suggested by a run's stroboscopic samples (..., SAMPLES, 3): the
     smallest p whose repeat |y(nT) - y((n-p)T)| is within 10 times the best of any p."""
     last = strobes[:, -1:, :]
-    gaps = _norm(last - strobes[:, -2::-1][:, :MAX_ORBIT_PERIOD], scale[:, None, :])
+    gaps = norm(last - strobes[:, -2::-1][:, :MAX_ORBIT_PERIOD], scale[:, None, :])
     gaps = np.where(np.isfinite(gaps), gaps, np.inf)
     best = gaps.min(axis=1, keepdims=True)
     within = gaps <= 10 * best
@@ -1001,29 +794,4 @@ def _orbit_period(strobes, scale):
     return np.where(np.isfinite(best[:, 0]), p, 1)
 
 
-def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
-    """Error estimate [-] of metric rows from a run and its rerun at twice the steps per
-    period (same points, engine metric rows).
-
-    The largest relative change of ``power`` and ``v_peak`` and of ``x_max`` and ``x_min``
-    (relative to the displacement amplitude): with RK4's 4th order the coarse run's own
-    error is about 16/15 of it.
-    """
-    coarse, fine = np.asarray(coarse), np.asarray(fine)
-
-    def change(index, scale):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ratio = np.abs(coarse[..., index] - fine[..., index]) / scale
-        return np.where(scale > 0, ratio, 0.0)
-
-    amplitude = 0.5 * (fine[..., METRIC.x_max] - fine[..., METRIC.x_min])
-    return np.maximum.reduce([
-        change(METRIC.power, np.abs(fine[..., METRIC.power])),
-        change(METRIC.v_peak, np.abs(fine[..., METRIC.v_peak])),
-        change(METRIC.x_max, amplitude),
-        change(METRIC.x_min, amplitude),
-    ])
-
-
-__all__ = ["COPIES", "Orbits", "copies_width", "halving_error", "monodromy", "on_its_way",
-           "orbit_scales", "perturbed_copies", "reach", "solve_orbits", "sorted_multipliers"]
+__all__ = ["Orbits", "on_its_way", "reach", "solve_orbits"]

@@ -5,7 +5,7 @@ the grid takes the step of its parameters (``steps_per_period``, chosen from its
 when unset) for the periodic-orbit solver's runs (:data:`FREE_PERIODS` where the linear
 response from rest provably stays clear of the stop, twice its amplitude below the gap;
 else :data:`CONTACT_PERIODS`) and, with contact, for the periods the slowest transient
-needs to come within ``orbits.NEAR`` of the orbit (at most ``max_periods``). Contact only
+needs to come within ``acceptance.NEAR`` of the orbit (at most ``max_periods``). Contact only
 adds damping, and a point continued from its neighbour starts closer to its orbit, so this
 is rather an upper estimate. The run time divides by a typical rate of the lane engine
 (:data:`harvester_sweep.timescales.STEPS_PER_SECOND`, the package's one run-time rate); the
@@ -21,8 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import timescales
+from .acceptance import NEAR
 from .linear import linear_response
-from .orbits import NEAR, D
+from .period_map import D
 
 #: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
 LONG_RUN_SECONDS = 3600.0

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import _engine
+from . import period_map
 from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PRESET_NOTES, resolve_parameters
 from .results import solve
@@ -58,7 +58,7 @@ class SceneResult:
         if periods is None:
             orbit = max(int(self.metrics["orbit_period"]), 1)
             periods = orbit * math.ceil(4 / orbit)
-        values = _engine.record_series(pack_parameters(self.parameters), self.state, periods)
+        values = period_map.record(pack_parameters(self.parameters), self.state, periods)
         t0 = self.metrics["periods_run"] / self.parameters["frequency"]
         return series_dataset(values, t0, self.parameters)
 

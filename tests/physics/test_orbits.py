@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 
 from benchmarks.cases import GRID
-from harvester_sweep import _engine, orbits, packing, resolve_parameters, run_scene
+from harvester_sweep import (
+    _engine,
+    acceptance,
+    orbits,
+    packing,
+    period_map,
+    resolve_parameters,
+    run_scene,
+)
 from harvester_sweep._engine import METRIC, PARAM, STATUS
 from harvester_sweep.orbits import solve_orbits
 from tests.helpers import phasor
@@ -67,7 +75,7 @@ def _run_periods(rows, states, periods):
 
 def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     """Clear of the stop the solver takes the monodromy in closed form, the contact-free
-    RK4 step's matrix to the power N p (orbits.free_monodromy); the engine's lanes, run
+    RK4 step's matrix to the power N p (period_map.free_monodromy); the engine's lanes, run
     from copies of a state moved along each component, give the same matrix (the map is
     affine there: the forward differences are exact to rounding)."""
     points = [resolve_parameters("paper", gap=1.0, frequency=f, resistance=r,
@@ -76,10 +84,10 @@ def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     packed = packing.pack_points(points)
     periods = np.array([1, 2, 3])
     scale = np.array([[1e-6, 1e-3, 1.0]] * len(points))
-    states = orbits.perturbed_copies(packed.states, scale)
+    states = period_map.perturbed_copies(packed.states, scale)
     metrics = _run_periods(np.repeat(packed.rows, 4, axis=0), states, np.repeat(periods, 4))
-    lanes = orbits.monodromy(states.reshape(len(points), 4, -1), scale)
-    closed = orbits.free_monodromy(packed.rows, packed.rows[:, PARAM.steps], periods)
+    lanes = period_map.monodromy(states.reshape(len(points), 4, -1), scale)
+    closed = period_map.free_monodromy(packed.rows, packed.rows[:, PARAM.steps], periods)
     assert np.all(metrics[:, METRIC.impacts_per_period] == 0)
     # (relative to each column's scale: the differences' rounding, 1e-16 / 1e-6)
     error = np.abs(lanes - closed) * scale[:, None, :] / scale[:, :, None]
@@ -103,11 +111,11 @@ def test_spread_differences_step_over_a_jump_of_the_map():
 
     def error(spread):
         """The monodromy's largest error, in scaled components."""
-        states = orbits.perturbed_copies(y0, scale, "spread" if spread else "central")
+        states = period_map.perturbed_copies(y0, scale, "spread" if spread else "central")
         z = states[:, :3] / scale
-        jump = (z[:, 0] > z0[0] + 0.5 * orbits.CENTRAL) * 1e-6
+        jump = (z[:, 0] > z0[0] + 0.5 * period_map.CENTRAL) * 1e-6
         states[:, :3] = (z @ a.T + 0.01 * z[:, :1] ** 2 + jump[:, None]) * scale
-        m = orbits.monodromy(states.reshape(1, -1, len(y0[0])), scale)[0]
+        m = period_map.monodromy(states.reshape(1, -1, len(y0[0])), scale)[0]
         return np.max(np.abs(m * scale[0][None, :] / scale[0][:, None] - exact))
 
     assert error(spread=True) < 1e-8
@@ -126,7 +134,7 @@ def test_the_spectral_radius_is_the_rate_at_which_the_motion_returns():
     result = solve_orbits(packed.rows, packed.states)
     m = result.metrics[0]
     assert m[METRIC.status] == STATUS.settled and m[METRIC.orbit_period] == 4
-    scale = orbits.orbit_scales(packed.rows, m[None, METRIC.x_max], m[None, METRIC.v_peak])
+    scale = period_map.orbit_scales(packed.rows, m[None, METRIC.x_max], m[None, METRIC.v_peak])
     states = result.finals.copy()
     states[0, :3] += 1e-6 * scale[0]
     ends = [states[0, :3].copy()]
@@ -301,7 +309,7 @@ def test_a_stable_orbit_that_nearly_grazes_is_not_taken_from_beyond_its_margin()
     from rest passes it again and again, never nearer than 0.012 (the transient, run for
     40,000 periods, does not settle): within NEAR, its next periods as the monodromy
     predicts, yet beyond that near miss, where the period map is not the orbit's. It was
-    taken after 182 periods; the motion must now come within the margin (orbits.reach),
+    taken after 182 periods; the motion must now come within the margin (acceptance.reach),
     and the point is reported not settled, as the transient says."""
     _not_settled_as_the_transient(gap=0.25e-6, frequency=103.79746835443038,
                                   resistance=1e5, restitution=0.8857142857142857)
@@ -325,16 +333,16 @@ def test_an_orbit_reached_along_a_multiplier_near_minus_one_is_taken():
     rows = packed.rows.copy()
     rows[:, PARAM.steps], rows[:, PARAM.max_periods], rows[:, PARAM.tolerance] = (
         solved.steps[0], 2000, 0.0)
-    scale = orbits.orbit_scales(packed.rows[0], m[METRIC.x_max], m[METRIC.v_peak])
+    scale = period_map.orbit_scales(packed.rows[0], m[METRIC.x_max], m[METRIC.v_peak])
     state, distances = packed.states.copy(), []
     for _ in range(3):
         _engine.run_points(rows, state, np.empty((1, len(METRIC))), np.empty((1, 0, 3)))
         distances.append(np.max(np.abs(state[0, :3] - solved.finals[0, :3]) / scale))
-    assert distances[2] < distances[1] < distances[0] < orbits.NEAR, distances
+    assert distances[2] < distances[1] < distances[0] < acceptance.NEAR, distances
 
 
 def test_reach_is_the_margin_from_grazing():
-    """orbits.reach: NEAR for an orbit far from grazing or without a stop, else the near
+    """acceptance.reach: NEAR for an orbit far from grazing or without a stop, else the near
     miss relative to the x scale, or the overshoot 0.5 (v_imp / (w x))^2 of the slowest
     impact, whichever is smaller."""
     m = np.full((4, len(METRIC)), np.nan)
@@ -342,8 +350,8 @@ def test_reach_is_the_margin_from_grazing():
     m[2, METRIC.approach_velocity_min] = 0.1
     m[3, [METRIC.near_miss, METRIC.approach_velocity_min]] = 0.5, 2.0
     scale = np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 2.0, 1.0]])
-    np.testing.assert_allclose(orbits.reach(m, scale),
-                               [orbits.NEAR, 0.003, 0.5 * 0.05 ** 2, orbits.NEAR])
+    np.testing.assert_allclose(acceptance.reach(m, scale),
+                               [acceptance.NEAR, 0.003, 0.5 * 0.05 ** 2, acceptance.NEAR])
 
 
 def _not_settled_as_the_transient(**point):
@@ -375,10 +383,10 @@ def test_an_orbit_forward_differences_called_stable_is_not_taken():
 
 
 def _on_its_way(m, e0, e1, maps=1):
-    """orbits.on_its_way for one motion at ``e0`` and, ``maps`` maps later, ``e1`` from a
+    """acceptance.on_its_way for one motion at ``e0`` and, ``maps`` maps later, ``e1`` from a
     fixed point of monodromy ``m`` (unit scales, Newton's floor 1e-12)."""
     fixed = np.array([1.0, -2.0, 0.5])
-    return bool(orbits.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([maps]),
+    return bool(acceptance.on_its_way((fixed + e0)[None], (fixed + e1)[None], np.array([maps]),
                                   fixed[None], m[None], np.ones((1, 3)), np.array([1e-12]))[0])
 
 
@@ -397,7 +405,7 @@ def test_on_its_way_follows_the_monodromys_prediction():
     assert judge(small) and judge(small, maps=2)
     assert not judge(2 * small)  # its prediction peaks near 0.16, beyond NEAR
     assert not judge(small, moved=np.array([0.0, 0.0, 0.005]))  # not the linear regime
-    assert not judge(np.array([0.0, 0.0, 2 * orbits.NEAR]))  # contracting, but beyond NEAR
+    assert not judge(np.array([0.0, 0.0, 2 * acceptance.NEAR]))  # contracting, but beyond NEAR
     assert judge(np.array([0.0, 1e-13, 0.0]), moved=np.array([0.5, 0.0, 0.0]))  # on it
 
 
@@ -465,10 +473,10 @@ def test_attempts_end_at_an_orbit_they_could_not_take(monkeypatch):
         monkeypatch.setattr(orbits, "SETTLING", settling)
         calls = []
         run = _engine.run_points
-        monkeypatch.setattr(orbits._engine, "run_points",
+        monkeypatch.setattr(period_map._engine, "run_points",
                             lambda *a, **k: calls.append(1) or run(*a, **k))
         solved = solve_orbits(packed.rows, packed.states)
-        monkeypatch.setattr(orbits._engine, "run_points", run)
+        monkeypatch.setattr(period_map._engine, "run_points", run)
         assert solved.metrics[0, METRIC.status] == STATUS.not_settled
         assert solved.metrics[0, METRIC.periods_run] == packed.rows[0, PARAM.max_periods]
         rounds[settling] = len(calls)

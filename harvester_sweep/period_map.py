@@ -1,0 +1,258 @@
+"""The period map: the engine's RK4 runs over whole forcing periods, and their Jacobian.
+
+``P^p: y(0) -> y(pT)`` is the stroboscopic map of the engine's own fixed-step RK4 with
+located contact switches. Every analysis reaches the engine through this module, the only
+one outside ``_engine`` that calls it: the orbit solver and continuation evaluate the map
+(:class:`Batch`: many requests, each alone or with its perturbed copies, in one engine
+call), scenes and basins record a point's steps (:func:`record`).
+
+The monodromy ``dP^p/dy`` comes from perturbed copies of a state run beside it
+(:data:`COPIES`): ordinary points of the lane engine, the same RK4 with its switches
+located, so that the matrix includes the contact switches without any saltation algebra.
+Clear of the stops the model is linear, and the monodromy has a closed form
+(:func:`free_monodromy`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _engine
+from ._engine import METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
+
+#: Forward-difference step of the monodromy, relative to each component's scale [-].
+PERTURBATION = 1e-6
+#: Central-difference step of the monodromy an orbit is judged on and reports, relative to
+#: each component's scale: near grazing the map bends too sharply for forward differences
+#: at PERTURBATION (docs/numerics.md, "Periodic orbits") [-].
+CENTRAL = 1e-7
+#: The perturbed copies of a monodromy, by kind: each component's moves, relative to its
+#: scale, in the order the copies follow their state: forward differences, central ones,
+#: and the spread copies whose median slope steps over a jump of the map (monodromy) [-].
+COPIES = {"forward": (PERTURBATION,), "central": (CENTRAL, -CENTRAL),
+          "spread": (CENTRAL, -CENTRAL, 2 * CENTRAL, -2 * CENTRAL)}
+#: Newton's floor from rounding: a correction below this many rounding units of the
+#: period map, times the conditioning of I - M, is converged [-].
+ROUNDING = 100 * np.finfo(float).eps
+#: Components of the period map's state with a rigid stop: x [m], v [m/s], V [V]; a
+#: moving stop adds its own displacement [m] and velocity [m/s] (N_STROBE in all).
+D = N_RIGID
+
+
+def state_size(rows) -> int:
+    """Components of the period map of packed rows (n, len(PARAM)) solved together: D, or
+    N_STROBE where one of them has a moving stop."""
+    return N_STROBE if (np.asarray(rows)[:, PARAM.stop_ratio] > 0).any() else D
+
+
+def orbit_scales(rows, x, v_peak, size=D):
+    """Component scales of orbits of displacement amplitude ``x`` [m] and peak voltage
+    ``v_peak`` [V] (packed rows (..., len(PARAM))): x [m], w x [m/s], the larger of v_peak
+    and the voltage of that amplitude [V], and for ``size`` N_STROBE the stop's x [m] and
+    w x [m/s] (its motion is measured against the tip's)."""
+    w_x = rows[..., PARAM.v_per_x] * x
+    scales = [x, w_x, np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)]
+    return np.stack(scales + [x, w_x][:size - D], axis=-1)
+
+
+def copies_width(kind, D):
+    """Lanes of a state and its perturbed copies of ``kind`` (COPIES) in D components."""
+    return 1 + D * len(COPIES[kind])
+
+
+def perturbed_copies(states, scale, kind="forward"):
+    """Each state (n, len(STATE)) followed by its copies of ``kind`` (COPIES), each moved
+    along one of its first D components by a move times ``scale`` (n, D), the D
+    components in turn for each move: (n * copies_width(kind, D), len(STATE))
+    (D = scale.shape[1])."""
+    D = scale.shape[1]
+    n = len(states)
+    moves = COPIES[kind]
+    width = copies_width(kind, D)
+    out = np.repeat(states, width, axis=0).reshape(n, width, states.shape[1])
+    for k, move in enumerate(moves):
+        for c in range(D):
+            out[:, 1 + k * D + c, c] += move * scale[:, c]
+    return out.reshape(-1, states.shape[1])
+
+
+def monodromy(ends, scale):
+    """The monodromy matrices (n, D, D) from the end states (n, width, >= D) of the runs
+    of :func:`perturbed_copies` with the same ``scale`` (n, D), the kind of copies told by
+    their width: by forward differences, by central ones, or (spread) by the median of the
+    four slopes between the five states along each component."""
+    D = scale.shape[-1]
+    e = ends[..., :D]
+    if e.shape[1] == copies_width("spread", D):
+        # The RK4 map with located switches jumps by about its own error where a switch
+        # crosses a step's end: a slope across such a jump is far off, the other three
+        # are near the derivative (the median, to the first order in the step)
+        row = [e[:, 3 * D + 1:], e[:, D + 1:2 * D + 1], np.repeat(e[:, :1], D, axis=1),
+               e[:, 1:D + 1], e[:, 2 * D + 1:3 * D + 1]]  # at -2h, -h, 0, h, 2h
+        slopes = np.sort(np.diff(np.stack(row), axis=0), axis=0)
+        diff, h = (slopes[1] + slopes[2]) / 2, CENTRAL * scale
+    elif e.shape[1] == copies_width("central", D):
+        diff, h = (e[:, 1:D + 1] - e[:, D + 1:]) / 2, CENTRAL * scale
+    else:
+        diff, h = e[:, 1:] - e[:, :1], PERTURBATION * scale
+    return diff.transpose(0, 2, 1) / h[:, None, :]
+
+
+def sorted_multipliers(jacobians):
+    """Floquet multipliers (n, D) of monodromy matrices (n, D, D), largest modulus first."""
+    mult = np.linalg.eigvals(jacobians)
+    order = np.argsort(-np.abs(mult), axis=-1, kind="stable")
+    return np.take_along_axis(mult, order, axis=-1)
+
+
+def sane(metrics):
+    """Runs (metric rows (..., len(METRIC))) that neither diverged nor went beyond the
+    divergence limit."""
+    return (metrics[..., METRIC.status] != STATUS.diverged) \
+        & np.isfinite(metrics[..., METRIC.power])
+
+
+def free_monodromy(rows, steps, periods):
+    """The monodromy (n, D, D) of ``periods`` (n,) periods at ``steps`` (n,) steps per
+    period of packed rows (n, len(PARAM)) where the motion stays clear of the stops: the
+    engine's contact-free RK4 step matrix to the power of the steps (_engine.monodromy)."""
+    out = np.empty((len(rows), D, D))
+    _engine.free_monodromy(np.ascontiguousarray(rows), np.asarray(steps, dtype=float),
+                           np.asarray(periods, dtype=np.int64), out)
+    return out
+
+
+def free_extent(rows, states, steps):
+    """The largest and smallest x [m] (n, 2) over one period of each row's motion from
+    ``states`` (n, len(STATE)) were it clear of the stops, at ``steps`` steps per period."""
+    out = np.empty((len(rows), 2))
+    _engine.free_extent(np.ascontiguousarray(rows), np.ascontiguousarray(states), steps, out)
+    return out
+
+
+def record(row, state, periods):
+    """The point of packed row ``row`` at every step over ``periods`` forcing periods from
+    ``state`` (not modified): (periods * steps_per_period + 1, len(SERIES)), columns as
+    _engine.SERIES."""
+    return _engine.record_series(row, state, periods)
+
+
+def warm_up():
+    """Compile the engine, or load it from numba's on-disk cache."""
+    _engine.warm_up()
+
+
+def engine_ready() -> bool:
+    """Whether the engine is in numba's on-disk cache (else its first run compiles it)."""
+    return _engine.cache_warm()
+
+
+@dataclass
+class Evaluation:
+    """One request of a :class:`Batch`, run: n points, each alone or with its copies.
+
+    Attributes
+    ----------
+    metrics : numpy.ndarray
+        float64 (n, len(METRIC)): the metrics of each point's own run.
+    ends : numpy.ndarray
+        float64 (n, len(STATE)): its end state.
+    strobes : numpy.ndarray
+        float64 (n, samples, size): its last stroboscopic samples.
+    ok : numpy.ndarray
+        bool (n,): every lane of the point (copies included) ran sane, and ended finite
+        in the map's components.
+    jacobian : numpy.ndarray or None
+        float64 (n, size, size): the monodromy from the copies; None without copies.
+    copy_metrics : numpy.ndarray or None
+        float64 (n, width - 1, len(METRIC)): the copies' metrics (they book no extrema).
+    work : numpy.ndarray
+        float64 (n,): RK4 steps run for the point, copies included.
+    """
+
+    metrics: np.ndarray
+    ends: np.ndarray
+    strobes: np.ndarray
+    ok: np.ndarray
+    jacobian: np.ndarray | None
+    copy_metrics: np.ndarray | None
+    work: np.ndarray
+
+
+class Batch:
+    """Requests of the period map gathered into one engine call.
+
+    ``size`` is the map's number of components (D, or N_STROBE with a moving stop) and
+    ``samples`` the stroboscopic samples read back per point. Each request (:meth:`add`)
+    is a set of points run for a number of periods, alone or each with its perturbed
+    copies; :meth:`run` runs them all at once and gives one :class:`Evaluation` per
+    request, in order. A point's bits do not depend on its lane, so gathering requests
+    changes no result.
+    """
+
+    def __init__(self, size: int, samples: int):
+        self.size, self.samples = size, samples
+        self._requests = []
+
+    def add(self, rows, states, periods, steps=None, copies=None, scale=None,
+            book=True) -> int:
+        """Add a request and return its index in :meth:`run`'s list.
+
+        rows : float64 (n, len(PARAM)) packed rows (not modified).
+        states : float64 (n, len(STATE)) start states (not modified).
+        periods : int or (n,) periods to run (PARAM.max_periods).
+        steps : float or (n,) steps per period; None keeps the rows'.
+        copies : a kind of COPIES, or None for the points alone; then ``scale`` (n, size)
+            gives each component's scale, as in :func:`perturbed_copies`.
+        book : False: the points' own runs book no extrema or force peaks either
+            (_engine.BOOKED_METRICS are NaN), as the copies never do.
+        """
+        rows = np.array(rows, dtype=float, ndmin=2)
+        states = np.asarray(states, dtype=float)
+        if steps is not None:
+            rows[:, PARAM.steps] = steps
+        rows[:, PARAM.max_periods] = periods
+        width = 1
+        if copies is not None:
+            width = copies_width(copies, self.size)
+            states = perturbed_copies(states, scale, copies)
+            rows = np.repeat(rows, width, axis=0)
+            rows[np.arange(len(rows)) % width != 0, PARAM.book] = 0.0
+        else:
+            states = states.copy()
+        if not book:
+            rows[:, PARAM.book] = 0.0
+        self._requests.append((rows, states, width, scale))
+        return len(self._requests) - 1
+
+    def run(self, settle: bool = False) -> list:
+        """Run every request in one engine call; ``settle``: the engine's steady-state test
+        may end a run early (it never ends one of MAX_ORBIT_PERIOD periods or fewer)."""
+        if not self._requests:
+            return []
+        rows = np.concatenate([r for r, _, _, _ in self._requests])
+        states = np.concatenate([s for _, s, _, _ in self._requests])
+        metrics = np.empty((len(rows), len(METRIC)))
+        strobes = np.empty((len(rows), self.samples, self.size))
+        # (in the calling thread: a call is short, so that an interrupt is seen between
+        # calls, and a kernel run in a thread of its own costs a new thread team each call)
+        _engine.run_points(rows, states, metrics, strobes, settle=settle)
+        work = metrics[:, METRIC.periods_run] * rows[:, PARAM.steps]
+        finite = np.all(np.isfinite(states[:, :self.size]), axis=1)
+        out, start = [], 0
+        for r, _, width, scale in self._requests:
+            n = len(r) // width
+            part = slice(start, start + len(r))
+            m = metrics[part].reshape(n, width, len(METRIC))
+            f = states[part].reshape(n, width, len(STATE))
+            ok = np.all(sane(m) & finite[part].reshape(n, width), axis=1)
+            copied = width > 1
+            out.append(Evaluation(
+                m[:, 0], f[:, 0], strobes[part][::width], ok,
+                monodromy(f, scale) if copied else None, m[:, 1:] if copied else None,
+                work[part].reshape(n, width).sum(axis=1)))
+            start += len(r)
+        self._requests = []
+        return out
