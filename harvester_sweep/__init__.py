@@ -12,8 +12,7 @@ from .parameters import PARAMETERS, PRESETS, ParameterError, TooStiffError, reso
 from .scene import SceneResult, run_scene
 from .sweep import run_sweep
 from .sweep_file import SweepSpec, load_sweep
-
-__version__ = "0.1.0"
+from .version import __version__
 
 __all__ = [
     "OUTPUTS",

@@ -437,7 +437,7 @@ def _continue(spec: ContinuationSpec) -> Branch:
     step, min_step, max_step, max_points = (spec.step, spec.min_step, spec.max_step,
                                             spec.max_points)
     p0 = spec.base
-    period_map.warm_up()
+    period_map.compile_engine()
     results = solve(pack_points([p0]))
     status = int(results.metrics[0, METRIC.status])
     if status != STATUS.settled:

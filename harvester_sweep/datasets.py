@@ -133,7 +133,7 @@ def grid_coordinates(grid: dict, spacing: dict) -> dict:
 
 def run_attributes(parameters: dict, notes) -> dict:
     """Global attributes: every input parameter (with its unit), notes, version and date."""
-    from . import __version__
+    from .version import __version__
 
     attrs = {
         "Conventions": "CF-1.8",

@@ -21,9 +21,9 @@ How, and why (docs/numerics.md, "Periodic orbits"):
   where that monodromy is still the map's: no lane of its run touched a stop (the map is
   affine off the stop), or the iterate moved less than ``CHORD`` from where it was taken.
   Where the run Newton starts from is expected to stay clear of the stops (the last run
-  did; from rest, the motion without the stops says so: period_map.free_extent), its first
+  did; from rest, the motion without the stops says so: period_map.contact_free_extent), its first
   iterate is a chord step too, with the contact-free map's monodromy in closed form
-  (:func:`free_monodromy`); if it touched after all, it is run again with copies.
+  (:func:`contact_free_monodromy`); if it touched after all, it is run again with copies.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
   first evaluation is also the trajectory's next p periods. A converged fixed point is
   taken only when it is stable (spectral radius below 1, by central differences) and the
@@ -74,7 +74,7 @@ from .period_map import (
     PERTURBATION,
     ROUNDING,
     D,
-    free_monodromy,
+    contact_free_monodromy,
     orbit_scales,
     sane,
     sorted_multipliers,
@@ -107,7 +107,7 @@ EXPANDING = 1.0
 #: never settles (docs/numerics.md) [-].
 SETTLING = 1e-2
 #: Steps per period of the linear motion that guesses whether a motion no run has taken
-#: yet will touch a stop in its first period (period_map.free_extent) [-].
+#: yet will touch a stop in its first period (period_map.contact_free_extent) [-].
 GUESS_STEPS = 64
 #: The first chunk of trajectory integrated after a failed attempt [periods].
 FIRST_CHUNK = 8
@@ -249,7 +249,7 @@ class _Points:
         # first period says whether it will)
         self.touched = np.zeros(n, bool)
         if self.D == D:
-            extent = period_map.free_extent(rows, states, GUESS_STEPS)
+            extent = period_map.contact_free_extent(rows, states, GUESS_STEPS)
             self.touched = reaches_a_stop(rows, extent[:, 0], extent[:, 1])
         self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
         self.metrics = np.full((n, len(METRIC)), np.nan)
@@ -314,7 +314,7 @@ class _Points:
         free = idx[~self.touched[idx]]
         if self.D == D and free.size:  # (a moving stop's map is not the tip's alone)
             self.chord[free] = self.affine[free] = self.exact[free] = True
-            self.newton_jacobian[free] = free_monodromy(self.rows[free], self.steps[free],
+            self.newton_jacobian[free] = contact_free_monodromy(self.rows[free], self.steps[free],
                                                         self.p[free])
 
     # -- one round ---------------------------------------------------------------------

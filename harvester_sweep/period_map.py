@@ -10,7 +10,7 @@ The monodromy ``dP^p/dy`` comes from perturbed copies of a state run beside it
 (:data:`COPIES`): ordinary points of the lane engine, the same RK4 with its switches
 located, so that the matrix includes the contact switches without any saltation algebra.
 Clear of the stops the model is linear, and the monodromy has a closed form
-(:func:`free_monodromy`).
+(:func:`contact_free_monodromy`).
 """
 
 from __future__ import annotations
@@ -114,7 +114,7 @@ def sane(metrics):
         & np.isfinite(metrics[..., METRIC.power])
 
 
-def free_monodromy(rows, steps, periods):
+def contact_free_monodromy(rows, steps, periods):
     """The monodromy (n, D, D) of ``periods`` (n,) periods at ``steps`` (n,) steps per
     period of packed rows (n, len(PARAM)) where the motion stays clear of the stops: the
     engine's contact-free RK4 step matrix to the power of the steps (_engine.monodromy)."""
@@ -124,7 +124,7 @@ def free_monodromy(rows, steps, periods):
     return out
 
 
-def free_extent(rows, states, steps):
+def contact_free_extent(rows, states, steps):
     """The largest and smallest x [m] (n, 2) over one period of each row's motion from
     ``states`` (n, len(STATE)) were it clear of the stops, at ``steps`` steps per period."""
     out = np.empty((len(rows), 2))
@@ -139,7 +139,7 @@ def record(row, state, periods):
     return _engine.record_series(row, state, periods)
 
 
-def warm_up():
+def compile_engine():
     """Compile the engine, or load it from numba's on-disk cache."""
     _engine.warm_up()
 

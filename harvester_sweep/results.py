@@ -113,7 +113,7 @@ def solve(packed: Packed, successors=None, estimated=None, samples: int = 0,
     """
     n = len(packed)
     chosen = np.zeros(n, dtype=bool) if estimated is None else estimated & ~packed.refused
-    period_map.warm_up()  # compile or load from the on-disk cache outside the timing
+    period_map.compile_engine()  # compile or load from the on-disk cache outside the timing
     start = time.perf_counter()
     orbits = solve_orbits(packed.rows, packed.states, successors, chosen, packed.accuracy,
                           packed.max_steps, samples, on_points)

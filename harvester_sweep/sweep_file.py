@@ -184,7 +184,7 @@ class SweepSpec:
 
     def canonical(self) -> str:
         """JSON text that identifies the sweep (what a partial result must match)."""
-        from . import __version__
+        from .version import __version__
 
         return json.dumps(
             {

@@ -20,8 +20,7 @@ final states. One concept per module:
 - ``cache``: numba's on-disk cache kept in step with this source.
 """
 
-from . import (booking, cache, hermite, lanes, model, monodromy, rk4, scheduler, steady,
-               stop_motion)
+from . import booking, cache, hermite, lanes, model, monodromy, rk4, scheduler, steady, stop_motion
 from .cache import SOURCE_DIGEST
 from .layouts import (
     BOOKED_METRICS,

@@ -58,7 +58,7 @@ SYNC = 2048.0
 
 
 @njit(**JIT)
-def table():
+def new_table():
     """A lane table of zeros, aligned to 64 bytes: no vector load of a row straddles two
     cache lines (a misaligned table ran the lane loop about 20 % slower)."""
     block = np.zeros(len(LANE) * LANES + 8)

@@ -40,7 +40,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
     n_lanes = min(LANES, len(queue))
     n_strobe = strobes.shape[1]
     ring_len = max(MAX_ORBIT_PERIOD + 1, n_strobe)
-    L = lanes.table()
+    L = lanes.new_table()
     ring = np.empty((n_lanes, ring_len, N_STROBE))
     acc = np.zeros((n_lanes, MAX_ORBIT_PERIOD, len(ACC)))
     gaps = np.empty((n_lanes, GAP_HISTORY, MAX_ORBIT_PERIOD + 1))

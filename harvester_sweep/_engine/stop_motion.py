@@ -28,24 +28,23 @@ from numba import njit
 from . import booking, hermite
 from .flags import JIT
 from .layouts import LANE
-from .model import voltage_rate
+from .model import contact_force, in_contact, voltage_rate
 from .rk4 import GRADED, THETA_TOL, WHOLE, forcing
 
 #: The coefficients of a point with a moving stop: the tip's (model.Coefficients) and
 #: k_s/m_s [1/s^2], c_s/m_s [1/s], m/m_s [-].
-Coefficients = namedtuple("Coefficients", ("wn2", "cm", "thm", "khm", "g", "ch", "irc", "thc",
-                                           "swn2", "scm", "ratio"))
+StopCoefficients = namedtuple("StopCoefficients", ("wn2", "cm", "thm", "khm", "g", "ch",
+                                                   "irc", "thc", "swn2", "scm", "ratio"))
 
 # Sub-step fractions of a step in contact: four quarters.
 QUARTERS = np.array([0.25, 0.25, 0.25, 0.25])
 
 
 @njit(inline="always", **JIT)
-def derivatives(x, v, V, xs, vs, f, k, on):
+def coupled_derivatives(x, v, V, xs, vs, f, k, on):
     """Accelerations of the tip and the stop [m/s^2] and dV/dt [V/s] at forcing ``f``
     [m/s^2]; ``on`` 1 in contact, 0 out of it."""
-    d = max(x - xs - k.g, 0.0)
-    fm = on * k.khm * d * math.sqrt(d) * max(1.0 + k.ch * (v - vs), 0.0)  # F_c / m
+    fm = contact_force(x - xs, v - vs, on * k.khm, k.g, k.ch)  # F_c / m
     a = f - k.wn2 * x + k.thm * V - k.cm * v - fm
     a_s = f - k.swn2 * xs - k.scm * vs + fm * k.ratio
     return a, a_s, -k.irc * V - k.thc * v
@@ -53,23 +52,23 @@ def derivatives(x, v, V, xs, vs, f, k, on):
 
 @njit(inline="always", **JIT)
 def force(x, v, xs, vs, kh_on, g, ch):
-    """Contact force F_c [N]; ``kh_on`` is k_h [N/m^1.5] in contact, 0 out of it."""
-    d = max(x - xs - g, 0.0)
-    return kh_on * d * math.sqrt(d) * max(1.0 + ch * (v - vs), 0.0)
+    """Contact force F_c [N] of the relative motion (the model's Hertz law); ``kh_on`` is
+    k_h [N/m^1.5] in contact, 0 out of it."""
+    return contact_force(x - xs, v - vs, kh_on, g, ch)
 
 
 @njit(**JIT)
-def rk4(x, v, V, xs, vs, dt, f0, fm, f1, k, on):
+def coupled_rk4(x, v, V, xs, vs, dt, f0, fm, f1, k, on):
     """One classical RK4 step of length dt [s] with forcing f0, fm, f1 [m/s^2] at its
     start, middle and end; returns the state at its end and int V^2 dt [V^2 s]."""
     hh, h6 = 0.5 * dt, dt / 6.0
-    a1, b1, e1 = derivatives(x, v, V, xs, vs, f0, k, on)
+    a1, b1, e1 = coupled_derivatives(x, v, V, xs, vs, f0, k, on)
     x2, v2, V2, s2, u2 = x + hh * v, v + hh * a1, V + hh * e1, xs + hh * vs, vs + hh * b1
-    a2, b2, e2 = derivatives(x2, v2, V2, s2, u2, fm, k, on)
+    a2, b2, e2 = coupled_derivatives(x2, v2, V2, s2, u2, fm, k, on)
     x3, v3, V3, s3, u3 = x + hh * v2, v + hh * a2, V + hh * e2, xs + hh * u2, vs + hh * b2
-    a3, b3, e3 = derivatives(x3, v3, V3, s3, u3, fm, k, on)
+    a3, b3, e3 = coupled_derivatives(x3, v3, V3, s3, u3, fm, k, on)
     x4, v4, V4, s4, u4 = x + dt * v3, v + dt * a3, V + dt * e3, xs + dt * u3, vs + dt * b3
-    a4, b4, e4 = derivatives(x4, v4, V4, s4, u4, f1, k, on)
+    a4, b4, e4 = coupled_derivatives(x4, v4, V4, s4, u4, f1, k, on)
     return (x + h6 * (v + 2.0 * (v2 + v3) + v4), v + h6 * (a1 + 2.0 * (a2 + a3) + a4),
             V + h6 * (e1 + 2.0 * (e2 + e3) + e4), xs + h6 * (vs + 2.0 * (u2 + u3) + u4),
             vs + h6 * (b1 + 2.0 * (b2 + b3) + b4),
@@ -77,7 +76,7 @@ def rk4(x, v, V, xs, vs, dt, f0, fm, f1, k, on):
 
 
 @njit(**JIT)
-def pieces(y, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, on):
+def coupled_pieces(y, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, on):
     """RK4 over the fraction [start, start + length] of a step of h [s] (forcing phase
     sin, cos = s0, c0 at its start) in sub-steps of ``fractions`` of ``length``, reversed
     when ``reverse``. ``y`` is (x, v, V, x_s, v_s); returns the end state and int V^2 dt."""
@@ -89,7 +88,7 @@ def pieces(y, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, on):
     for i in range(n):
         dt = (fractions[n - 1 - i] if reverse else fractions[i]) * length
         f1 = forcing(A, s0, c0, 2.0 * w * (at + dt))
-        x, v, V, xs, vs, dq = rk4(x, v, V, xs, vs, dt * h,
+        x, v, V, xs, vs, dq = coupled_rk4(x, v, V, xs, vs, dt * h,
                                   f0, forcing(A, s0, c0, w * (2.0 * at + dt)), f1, k, on)
         q += dq
         at += dt
@@ -100,15 +99,15 @@ def pieces(y, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, on):
 @njit(inline="always", **JIT)
 def _with_damping(k, ch):
     """``k`` with the contact damping c_h = ``ch`` [s/m]."""
-    return Coefficients(k.wn2, k.cm, k.thm, k.khm, k.g, ch, k.irc, k.thc, k.swn2, k.scm,
-                        k.ratio)
+    return StopCoefficients(k.wn2, k.cm, k.thm, k.khm, k.g, ch, k.irc, k.thc, k.swn2, k.scm,
+                            k.ratio)
 
 
 @njit(inline="always", **JIT)
 def _touching(y, k):
     """Whether the stop pushes at state ``y``: past both contact surfaces."""
     x, v, _, xs, vs = y
-    return (x - xs > k.g) & (1.0 + k.ch * (v - vs) > 0.0)
+    return in_contact(x - xs, v - vs, k.g, k.ch)
 
 
 @njit(**JIT)
@@ -126,8 +125,8 @@ def _switch(y, yn, s0, c0, n_steps, h, A, k, on):
     if d0 * d1 < 0.0:
         theta, kind = hermite.root(d0, r0, d1, r1, h, 0.0), 1
     if (1.0 + k.ch * r0) * (1.0 + k.ch * r1) < 0.0:
-        a0, b0, _ = derivatives(x, v, V, xs, vs, A * s0, k, on)
-        a1, b1, _ = derivatives(xn, vn, Vn, xsn, vsn, forcing(A, s0, c0, 2.0 * w), k, on)
+        a0, b0, _ = coupled_derivatives(x, v, V, xs, vs, A * s0, k, on)
+        a1, b1, _ = coupled_derivatives(xn, vn, Vn, xsn, vsn, forcing(A, s0, c0, 2.0 * w), k, on)
         s2 = hermite.root(r0, a0 - b0, r1, a1 - b1, h, -1.0 / k.ch)
         if s2 < theta:
             theta, kind = s2, 2
@@ -135,11 +134,12 @@ def _switch(y, yn, s0, c0, n_steps, h, A, k, on):
         return 0, 0.0
     for _ in range(4):  # Newton on the sub-step length
         f1 = forcing(A, s0, c0, 2.0 * w * theta)
-        e = rk4(x, v, V, xs, vs, theta * h, A * s0, forcing(A, s0, c0, w * theta), f1, k, on)
+        e = coupled_rk4(x, v, V, xs, vs, theta * h, A * s0, forcing(A, s0, c0, w * theta), f1,
+                        k, on)
         if kind == 1:
             residual, rate = e[0] - e[3] - k.g, e[1] - e[4]
         else:
-            a, b, _ = derivatives(e[0], e[1], e[2], e[3], e[4], f1, k, on)
+            a, b, _ = coupled_derivatives(e[0], e[1], e[2], e[3], e[4], f1, k, on)
             residual, rate = 1.0 + k.ch * (e[1] - e[4]), k.ch * (a - b)
         if rate == 0.0:
             break
@@ -160,15 +160,15 @@ def step(L, j):
     A, h, n_steps, g = L[LANE.amplitude + j], L[LANE.h + j], L[LANE.steps + j], L[LANE.gap + j]
     latch, kh = L[LANE.latch + j], L[LANE.kh + j]
     irc, thc = L[LANE.irc + j], L[LANE.thc + j]
-    k = Coefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j], L[LANE.khm + j], g, ch,
-                     irc, thc, L[LANE.stop_wn2 + j], L[LANE.stop_cm + j],
-                     L[LANE.stop_ratio + j])
+    k = StopCoefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j], L[LANE.khm + j], g,
+                         ch, irc, thc, L[LANE.stop_wn2 + j], L[LANE.stop_cm + j],
+                         L[LANE.stop_ratio + j])
     y = (x, v, V, xs, vs)
     if L[LANE.locate + j] == 0.0:  # plain fixed steps: the force always on, clipped
         if latch > 0.0 and x - xs <= g and v - vs > 0.0:  # predicted approach velocity
             ch = latch / (v - vs)
             k = _with_damping(k, ch)
-        yn, dq = pieces(y, 0.0, 1.0, WHOLE, False, s0, c0, n_steps, h, A, k, 1.0)
+        yn, dq = coupled_pieces(y, 0.0, 1.0, WHOLE, False, s0, c0, n_steps, h, A, k, 1.0)
         d0, d1 = x - xs - g, yn[0] - yn[3] - g
         if d0 <= 0.0 < d1:  # first touch, on the cubic Hermite interpolant
             ch = booking.impact(L, j, hermite.crossing_rate(d0, v - vs, d1, yn[1] - yn[4], h,
@@ -176,14 +176,14 @@ def step(L, j):
         on = 1.0
     else:
         if on == 1.0:
-            yn, dq = pieces(y, 0.0, 1.0, QUARTERS, False, s0, c0, n_steps, h, A, k, on)
+            yn, dq = coupled_pieces(y, 0.0, 1.0, QUARTERS, False, s0, c0, n_steps, h, A, k, on)
         else:  # apart, the tip's step is the lane loop's trial step; the stop's is its own
             yn, dq = _apart(L, j, y, k)
         if _touching(yn, k) != (on == 1.0):
             kind, theta = _switch(y, yn, s0, c0, n_steps, h, A, k, on)
             # up to the switch with the old contact state (graded towards a separation)...
             graded = on == 1.0 and kind == 1
-            ye, q1 = pieces(y, 0.0, theta, GRADED if graded else WHOLE, True, s0, c0,
+            ye, q1 = coupled_pieces(y, 0.0, theta, GRADED if graded else WHOLE, True, s0, c0,
                             n_steps, h, A, k, on)
             onset = on == 0.0 and kind == 1
             if onset:
@@ -191,8 +191,8 @@ def step(L, j):
                 k = _with_damping(k, ch)
             on = 1.0 - on
             # ... and after it with the new one (graded from a touch)
-            yn, q2 = pieces(ye, theta, 1.0 - theta, GRADED if onset else WHOLE, False, s0, c0,
-                            n_steps, h, A, k, on)
+            yn, q2 = coupled_pieces(ye, theta, 1.0 - theta, GRADED if onset else WHOLE, False,
+                                    s0, c0, n_steps, h, A, k, on)
             dq = q1 + q2
     xn, vn, Vn, xsn, vsn = yn
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]

@@ -19,6 +19,11 @@ def _module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
+def _is_module(name: str) -> bool:
+    path = PACKAGE.parent / name.replace(".", "/")
+    return path.with_suffix(".py").exists() or (path / "__init__.py").exists()
+
+
 def _imports(path: Path) -> set[str]:
     """Modules of harvester_sweep that ``path`` imports, anywhere in the file."""
     name = _module_name(path)
@@ -32,11 +37,11 @@ def _imports(path: Path) -> set[str]:
             else:
                 base = node.module or ""
             if base.startswith("harvester_sweep"):
-                found.add(base)
-                # "from . import x" imports the module x
-                found.update(f"{base}.{a.name}" for a in node.names
-                             if (PACKAGE.parent / f"{base}.{a.name}".replace(".", "/")).with_suffix(
-                                 ".py").exists())
+                # "from . import x" imports the module x; any other name comes from base
+                modules = {f"{base}.{a.name}" for a in node.names if _is_module(f"{base}.{a.name}")}
+                found.update(modules)
+                if len(modules) < len(node.names):
+                    found.add(base)
         elif isinstance(node, ast.Import):
             found.update(a.name for a in node.names if a.name.startswith("harvester_sweep"))
     return found - {name}
@@ -62,8 +67,6 @@ def test_the_engine_imports_nothing_from_the_layers_above_it():
 
 def test_no_module_imports_itself_through_others():
     graph = _graph()
-    # the package's __init__ re-exports the API; it is the top, not a layer
-    graph = {m: {d for d in deps if d != "harvester_sweep"} for m, deps in graph.items()}
     state: dict[str, int] = {}
 
     def visit(module, path):
@@ -80,6 +83,76 @@ def test_no_module_imports_itself_through_others():
 
     for module in sorted(graph):
         visit(module, [])
+
+
+# The package's layers, lowest first: a module imports from its own layer or those below,
+# never from one above (the package's __init__, which re-exports the API, is the top).
+LAYERS = (
+    ("version", "_engine"),
+    ("contact", "materials", "linear"),
+    ("timescales",),
+    ("parameters",),
+    ("outputs", "packing"),
+    ("period_map", "accuracy", "acceptance"),
+    ("orbits",),
+    ("results", "run_estimate"),
+    ("datasets", "plots"),
+    ("scene", "continuation", "basins", "sweep_file", "chunks", "chunk_store"),
+    ("branch_file", "basin_file", "cluster"),
+    ("sweep",),
+    ("cli",),
+)
+
+
+def _layer(module: str) -> int:
+    if module == "harvester_sweep":
+        return len(LAYERS)
+    name = module.split(".")[1]
+    found = [i for i, layer in enumerate(LAYERS) if name in layer]
+    assert found, f"{module} is in no layer of LAYERS: place it there"
+    return found[0]
+
+
+def test_no_module_imports_from_a_layer_above_its_own():
+    for module, deps in _graph().items():
+        for dep in deps:
+            assert _layer(dep) <= _layer(module), f"{module} imports {dep}, a layer above it"
+
+
+def test_the_engine_is_called_through_the_period_map_alone():
+    """Outside _engine, only period_map calls the engine's functions (the other modules read
+    its layouts and constants)."""
+    from harvester_sweep import _engine
+    functions = {name for name in _engine.__all__ if callable(getattr(_engine, name))
+                 and name.islower()}
+    for path in PACKAGE.glob("*.py"):
+        if path.name == "period_map.py":
+            continue
+        tree = ast.parse(path.read_text())
+        used = {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
+                and isinstance(n.value, ast.Name) and n.value.id == "_engine"}
+        used |= {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
+                 and (n.module or "").endswith("_engine") for a in n.names}
+        assert not used & functions, f"{path.name} calls the engine's {used & functions}"
+
+
+def test_no_public_function_or_class_is_defined_in_two_modules():
+    """A function, class or named tuple without a leading underscore is defined once in
+    the package: one name, one meaning."""
+    where: dict[str, list[str]] = {}
+    for path in PACKAGE.rglob("*.py"):
+        for node in ast.parse(path.read_text()).body:
+            names = []
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                names = [node.name]
+            elif isinstance(node, ast.Assign) and isinstance(node.value, ast.Call) \
+                    and getattr(node.value.func, "id", "") == "namedtuple":
+                names = [t.id for t in node.targets if isinstance(t, ast.Name)]
+            for name in names:
+                if not name.startswith("_"):
+                    where.setdefault(name, []).append(_module_name(path))
+    twice = {name: modules for name, modules in where.items() if len(modules) > 1}
+    assert not twice, twice
 
 
 def test_the_guides_table_of_outputs_is_the_registrys():

@@ -75,7 +75,7 @@ def _run_periods(rows, states, periods):
 
 def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     """Clear of the stop the solver takes the monodromy in closed form, the contact-free
-    RK4 step's matrix to the power N p (period_map.free_monodromy); the engine's lanes, run
+    RK4 step's matrix to the power N p (period_map.contact_free_monodromy); the engine's lanes, run
     from copies of a state moved along each component, give the same matrix (the map is
     affine there: the forward differences are exact to rounding)."""
     points = [resolve_parameters("paper", gap=1.0, frequency=f, resistance=r,
@@ -87,7 +87,7 @@ def test_the_closed_form_monodromy_is_the_engines_rk4_period_map():
     states = period_map.perturbed_copies(packed.states, scale)
     metrics = _run_periods(np.repeat(packed.rows, 4, axis=0), states, np.repeat(periods, 4))
     lanes = period_map.monodromy(states.reshape(len(points), 4, -1), scale)
-    closed = period_map.free_monodromy(packed.rows, packed.rows[:, PARAM.steps], periods)
+    closed = period_map.contact_free_monodromy(packed.rows, packed.rows[:, PARAM.steps], periods)
     assert np.all(metrics[:, METRIC.impacts_per_period] == 0)
     # (relative to each column's scale: the differences' rounding, 1e-16 / 1e-6)
     error = np.abs(lanes - closed) * scale[:, None, :] / scale[:, :, None]
