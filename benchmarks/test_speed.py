@@ -113,7 +113,7 @@ def test_lane_loop_alone(benchmark, figures):
     numba_threads = numba.get_num_threads()
     rates = {}
     for touching in (0.0, 1.0):
-        L = lanes.table()
+        L = lanes.new_table()
         for j in range(LANES):
             p = hs.resolve_parameters("paper", steps_per_period=1024, frequency=100.0 + 5 * j)
             lanes.load(L, j, packing.pack_parameters(p), packing.initial_state(p), 0.0)

@@ -30,7 +30,7 @@ def _points(rng):
 
 def _run(points, marked):
     """The trial rows (x, v, V) after _quarter_steps with the lanes ``marked``."""
-    L = lanes.table()
+    L = lanes.new_table()
     for j, (p, y, phase) in enumerate(points):
         lanes.load(L, j, packing.pack_parameters(p), y, 0.0)
         L[LANE.sin + j], L[LANE.cos + j] = math.sin(phase), math.cos(phase)
