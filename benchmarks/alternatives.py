@@ -138,8 +138,9 @@ def diffrax_ensemble(p: dict, periods: int, n_points: int, rtol: float, *, sprea
     Tsit5 with ``PIDController(rtol, atol = rtol * (1e-6 m, 1e-2 m/s, 1e-5 V))``, float64,
     saved at every period boundary, over ``periods`` forcing periods of the nominal
     frequency. The lanes' forcing frequencies are spread by up to +-``spread`` (relative) so
-    that XLA cannot fold them into one; lane ``n_points // 2`` has exactly the nominal frequency. The first call compiles
-    (not timed into the result), the second is timed with ``block_until_ready``.
+    that XLA cannot fold them into one; lane ``n_points // 2`` has exactly the nominal
+    frequency. The first call compiles (not timed into the result), the second is timed
+    with ``block_until_ready``.
 
     Parameters
     ----------
@@ -205,7 +206,8 @@ def main(periods: int = 94, rtols=(1e-6, 1e-8, 1e-10), ensembles=(64, 16)) -> No
     compile_seconds = {}
     for rtol in rtols:
         seconds, states = lsoda(p, periods, rtol)
-        print(f"| {'scipy LSODA':<20} | {rtol:>6.0e} | {seconds:>9.3g} | {error(states[-1]):>8.1e} |"
+        print(f"| {'scipy LSODA':<20} | {rtol:>6.0e} | {seconds:>9.3g} | "
+              f"{error(states[-1]):>8.1e} |"
               f" {'':>7} |")
         for n_points in ensembles:
             details = {}
