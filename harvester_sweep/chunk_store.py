@@ -192,7 +192,7 @@ class ChunkStore:
         if not path.exists() and not seal.exists():
             return None
         try:
-            return _sealed_bytes(path, seal, self.digest)
+            return _sealed_bytes(path, seal, self.digest, chunk)
         except _Damage as damage:
             warnings.warn(f"{path} is damaged: {damage}; computing chunk {chunk} again",
                           DamagedChunkWarning, stacklevel=3)
@@ -221,18 +221,24 @@ class _Damage(Exception):
     """Why a chunk file fails its check."""
 
 
-def _sealed_bytes(path: Path, seal: Path, digest: str) -> bytes:
+def _sealed_bytes(path: Path, seal: Path, digest: str, chunk: int) -> bytes:
     """The bytes of chunk file ``path`` when its ``seal`` vouches for them and names the
-    sweep of SHA-256 ``digest``; else raise _Damage saying what is wrong."""
+    sweep of SHA-256 ``digest`` and the chunk ``chunk`` (a chunk and its seal copied over
+    another's place check out by their checksum alone); else raise _Damage saying what is
+    wrong."""
     if not seal.exists():
         raise _Damage("it has no seal (the run stopped before sealing it)")
     try:
         expected = json.loads(seal.read_text())
         written, checksum, sweep = expected["bytes"], expected["sha256"], expected["sweep_sha256"]
+        sealed = expected["chunk"]
     except (OSError, ValueError, KeyError, TypeError):
         raise _Damage(f"its seal {seal.name} cannot be read") from None
     if sweep != digest:
         raise _Damage("its seal belongs to another sweep")
+    if sealed != chunk:
+        raise _Damage(f"its seal is chunk {sealed!r}'s, not chunk {chunk}'s (copied from "
+                      "another chunk's place)")
     try:
         data = path.read_bytes()
     except OSError as error:
