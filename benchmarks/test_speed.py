@@ -50,8 +50,8 @@ from benchmarks.cases import (
 from benchmarks.engine_calls import EngineCalls
 from harvester_sweep import _engine, packing, results
 from harvester_sweep._engine import lanes
-from harvester_sweep._engine.flags import JIT
 from harvester_sweep._engine.layouts import GROUP, LANE, LANES
+from harvester_sweep.jit import JIT
 from tests.helpers import Reference
 
 ROOT = Path(__file__).resolve().parents[1]

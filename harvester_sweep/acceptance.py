@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._engine import METRIC, N_RIGID, PARAM
+from .models import tip_mass
 
 #: A motion is in an orbit's linear regime when the monodromy predicts its next p periods
 #: to this fraction of their distance from the orbit [-].
@@ -99,16 +100,13 @@ def never_reaches(rows, high, low, e):
     the stops that reach from x = ``low`` to ``high`` [m] (n,) never reach a stop of packed
     rows (n, len(PARAM)) either.
 
-    The homogeneous part of the linear motion loses energy
-    ``E = (k x^2 + m v^2 + C_p V^2) / 2`` (``dE/dt = -c v^2 - V^2/R``), so
-    ``x(t) <= high + sqrt(2 E / k)`` at all later times, and ``x(t) >= low - sqrt(2 E / k)``
-    (a moving stop's own transient is bounded alike, by ``k_s x_s^2 + m_s v_s^2``)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cv = np.where(rows[:, PARAM.thc] != 0, rows[:, PARAM.thm] / rows[:, PARAM.thc], 0.0)
-    bound = np.sqrt(e[:, 0] ** 2 + (e[:, 1] ** 2 + cv * e[:, 2] ** 2) / rows[:, PARAM.wn2])
+    The homogeneous part of the linear motion loses energy, which bounds its excursion B
+    (the model's ``excursion_bound``), so ``x(t) <= high + B`` at all later times, and
+    ``x(t) >= low - B`` (a moving stop's own transient is bounded alike)."""
+    bound = tip_mass.excursion_bound(e[:, :N_RIGID], rows[:, PARAM.wn2], rows[:, PARAM.thm],
+                                     rows[:, PARAM.thc])
     if e.shape[1] > N_RIGID:  # (a moving stop's own transient)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            stop = np.sqrt(e[:, 3] ** 2 + e[:, 4] ** 2 / rows[:, PARAM.stop_wn2])
+        stop = tip_mass.stop_excursion_bound(e[:, N_RIGID:], rows[:, PARAM.stop_wn2])
         bound = bound + np.where(rows[:, PARAM.stop_ratio] > 0, stop, 0.0)
     return (high + bound + PROOF_MARGIN * (np.abs(high) + bound) < rows[:, PARAM.gap]) \
         & (low - bound - PROOF_MARGIN * (np.abs(low) + bound) > -rows[:, PARAM.lower_gap])

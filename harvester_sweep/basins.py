@@ -38,6 +38,7 @@ from . import period_map
 from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, SERIES, STATE, STATUS
 from .datasets import grid_coordinates, run_attributes
 from .linear import linear_response
+from .models import tip_mass
 from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
 from .parameters import PRESET_NOTES, ParameterError, is_number, resolve_parameters
@@ -51,7 +52,7 @@ TOLERANCE = 1e-6
 #: The components of a start, with their units, and the default half-width of the box in
 #: multiples of the larger of the gap and the stop-free displacement amplitude |X| (the
 #: velocity and voltage scaled from it by w and the stop-free |V| / |X|).
-BOX = {"x": "m", "v": "m/s", "voltage": "V"}
+BOX = {c.name: c.unit for c in tip_mass.STATE}
 BOX_SIZE = 2.0
 MAX_SAMPLES = 1_000_000
 #: Starts handed to one solve: bounds the memory of a map (about 2 kB a start); the

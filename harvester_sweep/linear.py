@@ -1,37 +1,36 @@
-"""Closed-form steady state of the harvester without its stop (phasors, docs/model.md)."""
+"""Steady state of the harvester without its stop: the phasor of the model's linear system.
+
+The model declares itself, clear of its stops, as ``y' = M y + b a(t)`` (its
+``linear_system``); under the base acceleration ``a(t) = A sin(w t) = Im(A e^{j w t})`` the
+steady state is ``y = Im(Y e^{j w t})`` with ``(j w I - M) Y = b A``. For the tip-mass
+model this is the textbook closed form (docs/model.md)::
+
+    X = m A / (k - m w^2 + j w c + j w theta^2 R / (1 + j w R C_p)),
+    V = -j w theta R X / (1 + j w R C_p)
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .models import tip_mass
 
-def linear_response(mass, natural_frequency, damping_ratio, coupling, capacitance, resistance,
-                    amplitude, frequency, **_):
+
+def linear_response(amplitude, frequency, **parameters):
     """Complex amplitudes of x = Im(X e^{j w t}) and V = Im(V e^{j w t}) with no stop.
-
-    X = m A / (k - m w^2 + j w c + j w theta^2 R / (1 + j w R C_p)),
-    V = -j w theta R X / (1 + j w R C_p), with k = m wn^2, c = 2 zeta m wn.
 
     Parameters
     ----------
-    mass : float
-        Tip mass m [kg].
-    natural_frequency : float
-        f_n [Hz].
-    damping_ratio : float
-        zeta [-].
-    coupling : float
-        theta [N/V].
-    capacitance : float
-        C_p [F].
-    resistance : float
-        R [Ohm].
     amplitude : float
         Base acceleration amplitude A [m/s^2].
     frequency : float or numpy.ndarray
-        Excitation frequency f [Hz]; any of the parameters may be an array (broadcast).
-    **_
-        Other parameters, ignored, so that a whole parameter dict can be passed.
+        Excitation frequency f [Hz].
+    **parameters
+        The model's parameters its linear system reads (the tip-mass model: mass [kg],
+        natural_frequency [Hz], damping_ratio [-], coupling [N/V], capacitance [F],
+        resistance [Ohm]); any of them, and ``amplitude`` and ``frequency``, may be arrays
+        (broadcast). Other parameters are ignored, so that a whole parameter dict can be
+        passed.
 
     Returns
     -------
@@ -40,9 +39,12 @@ def linear_response(mass, natural_frequency, damping_ratio, coupling, capacitanc
     V : complex numpy.ndarray
         Voltage amplitude [V]; the mean power is |V|^2 / (2 R) [W].
     """
-    wn = 2 * np.pi * np.asarray(natural_frequency)
-    w = 2 * np.pi * np.asarray(frequency)
-    k, c = mass * wn**2, 2 * damping_ratio * mass * wn
-    load = 1 + 1j * w * resistance * capacitance
-    X = mass * amplitude / (k - mass * w**2 + 1j * w * c + 1j * w * coupling**2 * resistance / load)
-    return X, -1j * w * coupling * resistance * X / load
+    m, b = tip_mass.linear_system(**parameters)
+    system = 2j * np.pi * np.asarray(frequency, dtype=float)[..., None, None] * _EYE - m
+    forcing = np.asarray(amplitude, dtype=float)[..., None, None] * b[:, None]
+    y = np.linalg.solve(system, forcing)[..., 0]  # (stacks broadcast against each other)
+    return y[..., _COMPONENT["x"]], y[..., _COMPONENT["voltage"]]
+
+
+_COMPONENT = {c.name: i for i, c in enumerate(tip_mass.STATE)}
+_EYE = np.eye(len(tip_mass.STATE))

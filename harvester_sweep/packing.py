@@ -17,6 +17,7 @@ import numpy as np
 from . import timescales
 from ._engine import NO_STOP, PARAM, STATE
 from .contact import contact_damping_of, damping_factor, lower_stop
+from .models import hertz
 from .parameters import TooStiffError
 
 
@@ -88,16 +89,16 @@ def initial_state(p: dict) -> np.ndarray:
         low, high = 0.0, -g
         for _ in range(200):
             delta = 0.5 * (low + high)
-            if delta + kh * delta**1.5 * (1.0 / k + 1.0 / ks) + g > 0.0:
+            if delta + hertz.static_force(kh, delta) * (1.0 / k + 1.0 / ks) + g > 0.0:
                 high = delta
             else:
                 low = delta
-        x0, xs0 = -kh * delta**1.5 / k, kh * delta**1.5 / ks
+        x0, xs0 = -hertz.static_force(kh, delta) / k, hertz.static_force(kh, delta) / ks
     elif g < 0.0 and kh > 0.0:
         low, high = g, 0.0
         for _ in range(200):
             x0 = 0.5 * (low + high)
-            if k * x0 + kh * (x0 - g) ** 1.5 > 0.0:
+            if k * x0 + hertz.static_force(kh, x0 - g) > 0.0:
                 high = x0
             else:
                 low = x0

@@ -21,6 +21,7 @@ import numpy as np
 
 from . import _engine
 from ._engine import METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
+from .models import tip_mass
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
@@ -36,8 +37,10 @@ COPIES = {"forward": (PERTURBATION,), "central": (CENTRAL, -CENTRAL),
 #: Newton's floor from rounding: a correction below this many rounding units of the
 #: period map, times the conditioning of I - M, is converged [-].
 ROUNDING = 100 * np.finfo(float).eps
-#: Components of the period map's state with a rigid stop: x [m], v [m/s], V [V]; a
-#: moving stop adds its own displacement [m] and velocity [m/s] (N_STROBE in all).
+#: Components of the period map's state, as the model declares them: with a rigid stop
+#: the first D (x [m], v [m/s], V [V]); a moving stop adds its own displacement [m] and
+#: velocity [m/s] (N_STROBE in all).
+COMPONENTS = tip_mass.STATE + tip_mass.STOP_STATE
 D = N_RIGID
 
 
@@ -49,12 +52,14 @@ def state_size(rows) -> int:
 
 def orbit_scales(rows, x, v_peak, size=D):
     """Component scales of orbits of displacement amplitude ``x`` [m] and peak voltage
-    ``v_peak`` [V] (packed rows (..., len(PARAM))): x [m], w x [m/s], the larger of v_peak
-    and the voltage of that amplitude [V], and for ``size`` N_STROBE the stop's x [m] and
-    w x [m/s] (its motion is measured against the tip's)."""
+    ``v_peak`` [V] (packed rows (..., len(PARAM))), by the kind of scale the model declares
+    for each of its first ``size`` components (models.state.Component): x [m], w x
+    [m/s], the larger of v_peak and the voltage of that amplitude [V] (a moving stop's
+    motion is measured against the tip's)."""
     w_x = rows[..., PARAM.v_per_x] * x
-    scales = [x, w_x, np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)]
-    return np.stack(scales + [x, w_x][:size - D], axis=-1)
+    by_kind = {"displacement": x, "velocity": w_x,
+               "voltage": np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)}
+    return np.stack([by_kind[c.scale] for c in COMPONENTS[:size]], axis=-1)
 
 
 def copies_width(kind, D):

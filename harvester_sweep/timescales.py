@@ -19,7 +19,11 @@ import math
 import operator
 from dataclasses import dataclass
 
+import numpy as np
+
 from .contact import contact_damping_of, lower_stop
+from .linear import linear_response
+from .models import hertz
 
 #: |h lambda| that RK4 keeps stable (2.78 on the negative real axis, 2.83 on the imaginary).
 RK4_STABILITY = 2.5
@@ -109,19 +113,9 @@ def _remembered(derive):
 @_remembered
 def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
-    m = p["mass"]
     wn = 2 * math.pi * p["natural_frequency"]
     w = 2 * math.pi * p["frequency"]
-    # At least 0.1 % damping in the estimate: an undamped resonance has no finite amplitude.
-    k, c = m * wn * wn, 2 * max(p["damping_ratio"], 1e-3) * m * wn
-
-    def velocity(omega):
-        electrical = (1j * omega * p["coupling"] ** 2 * p["resistance"]
-                      / (1 + 1j * omega * p["resistance"] * p["capacitance"]))
-        x = m * p["amplitude"] / (k - m * omega * omega + 1j * omega * c + electrical)
-        return abs(omega * x)
-
-    v = max(velocity(w), velocity(wn), 1e-12)
+    v = _free_velocity(*(p[name] for name in _LINEAR))
     contact = damping = delta = 0.0
     for stop in (p, lower_stop(p)):  # the faster of the stops in reach
         if stop is not None:
@@ -135,6 +129,25 @@ def time_scales(p: dict) -> TimeScales:
                       delta, support, support_damping)
 
 
+#: The parameters the stop-free velocity estimate reads.
+_LINEAR = ("mass", "natural_frequency", "damping_ratio", "coupling", "capacitance",
+           "resistance", "amplitude", "frequency")
+
+
+@functools.lru_cache(maxsize=65536)  # (a grid's other axes repeat these: the gap's, say)
+def _free_velocity(mass, natural_frequency, damping_ratio, coupling, capacitance, resistance,
+                   amplitude, frequency) -> float:
+    """The larger velocity amplitude [m/s] of the stop-free response at the forcing and at
+    the natural frequency (SI parameters as in parameters.PARAMETERS)."""
+    # At least 0.1 % damping in the estimate: an undamped resonance has no finite amplitude.
+    X, _ = linear_response(amplitude, np.array([frequency, natural_frequency]), mass=mass,
+                           natural_frequency=natural_frequency,
+                           damping_ratio=max(damping_ratio, 1e-3), coupling=coupling,
+                           capacitance=capacitance, resistance=resistance)
+    return max(float(np.max(np.abs(X) * 2 * math.pi * np.array([frequency,
+                                                               natural_frequency]))), 1e-12)
+
+
 def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     """The contact's rates [1/s] and penetration [m] of the (upper) stop of ``p`` at the
     expected velocity ``v`` [m/s], zeros when it is out of reach."""
@@ -146,11 +159,13 @@ def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     if not (kh > 0 and p["gap"] < 2.0 * v / omega):
         return 0.0, 0.0, 0.0
     ch = contact_damping_of(p, v)
-    delta = (5 * m * v * v / (4 * kh)) ** 0.4
-    if ch > 0:
-        delta = min(delta, (1.25 * m * v / (kh * ch)) ** 0.4)
+    energy = 0.5 * m * v * v
+    delta = hertz.penetration(energy, kh)
+    if ch > 0:  # (the damping force k_h c_h v delta^1.5 as the spring)
+        delta = min(delta, hertz.penetration(energy, kh * ch * v))
     delta += max(-p["gap"], 0.0)  # a preloaded stop is already pressed in
-    return math.sqrt(1.5 * kh * math.sqrt(delta) / m), kh * delta**1.5 * ch / m, delta
+    return (math.sqrt(hertz.stiffness(kh, delta) / m), hertz.static_force(kh, delta) * ch / m,
+            delta)
 
 
 @_remembered

@@ -1,14 +1,15 @@
 """The engine: many points of the harvester integrated to steady state by a fixed-step
 RK4 with located contact switches, in Numba.
 
-Private, numba and numpy only: nothing here imports from the rest of harvester_sweep.
+Private, numba and numpy only: nothing here imports from the rest of harvester_sweep but
+the layer below it, the models it runs (``harvester_sweep.models``: the tip-mass model's
+state, right-hand side, contact and contact-free step) and the compile flags
+(``harvester_sweep.jit``).
 The layers above hand it float arrays laid out by :mod:`.layouts` (parameter rows from
 ``harvester_sweep.packing``, states) and read back metric rows, stroboscopic samples and
 final states. One concept per module:
 
-- ``flags``: how every function is compiled;
-- ``layouts``: every row layout, from named fields;
-- ``model``: the model's state, right-hand side, contact and contact-free step;
+- ``layouts``: every row layout, from named fields (the state's from the model);
 - ``hermite``: the cubic Hermite interpolant of a step (extrema, crossings, int V^2 dt);
 - ``rk4``: RK4 over parts of a step and contact switches located inside it;
 - ``steady``: orbit periods from the stroboscopic samples, metrics of the last orbit;
@@ -20,7 +21,8 @@ final states. One concept per module:
 - ``cache``: numba's on-disk cache kept in step with this source.
 """
 
-from . import booking, cache, hermite, lanes, model, monodromy, rk4, scheduler, steady, stop_motion
+from ..models import hertz, tip_mass
+from . import booking, cache, hermite, lanes, monodromy, rk4, scheduler, steady, stop_motion
 from .cache import SOURCE_DIGEST
 from .layouts import (
     BOOKED_METRICS,
@@ -39,8 +41,9 @@ from .monodromy import free_extent, free_monodromy
 from .scheduler import record_series, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
-cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, model, monodromy,
-                                                 rk4, scheduler, steady, stop_motion))
+cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, monodromy, rk4,
+                                                 scheduler, steady, stop_motion, hertz,
+                                                 tip_mass))
 
 
 def cache_warm() -> bool:

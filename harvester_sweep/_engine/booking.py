@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from numba import njit
 
+from ..jit import JIT
 from . import hermite
-from .flags import JIT
 from .layouts import LANE
 
 

@@ -1,7 +1,8 @@
 """numba's on-disk cache of the engine, kept in step with the engine's source.
 
 numba checks a cached function against the stamp of the file that defines it, but the
-engine's entry points inline functions of every file of this package: after an edit of
+engine's entry points inline functions of every file of this package, of the models it
+runs (harvester_sweep.models) and of the compile flags (harvester_sweep.jit): after an edit of
 one of those alone (an editable install), they would run the old code. A digest of the
 whole engine's source is kept beside the cache; when it differs, every cached function of
 the engine is dropped and compiled again. The same digest identifies the engine in a
@@ -16,13 +17,17 @@ from pathlib import Path
 import numba
 
 _HERE = Path(__file__).parent
+#: The source the engine's machine code is made from: its own, the models', the flags'.
+_SOURCES = (_HERE, _HERE.parent / "models", _HERE.parent / "jit.py")
 
 
 def source_digest() -> str:
-    """SHA-256 of the engine's source files, in name order."""
+    """SHA-256 of the engine's source files (:data:`_SOURCES`), in name order."""
     digest = hashlib.sha256()
-    for path in sorted(_HERE.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    files = [p for s in _SOURCES for p in (sorted(s.glob("*.py")) if s.is_dir() else [s])]
+    for path in files:
+        digest.update(path.relative_to(_HERE.parent).as_posix().encode() + b"\0"
+                      + path.read_bytes())
     return digest.hexdigest()
 
 

@@ -11,7 +11,7 @@ import math
 
 from numba import njit
 
-from .flags import JIT
+from ..jit import JIT
 
 
 @njit(inline="always", **JIT)

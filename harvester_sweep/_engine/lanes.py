@@ -2,7 +2,7 @@
 
 The plain RK4 step of every lane runs in branch-free loops over groups of GROUP lanes,
 which LLVM compiles to vector code: out of contact the step is linear, and is applied as
-the matrix it is (model.free_step_map); a group with a lane in contact also runs the RK4
+the matrix it is (tip_mass.free_step_map); a group with a lane in contact also runs the RK4
 stages with the contact force. The rare steps that need more (a contact switch to locate,
 graded sub-steps next to a touch or a separation, an extremum or a force peak to place,
 the end of a forcing period) are marked and finished lane by lane in scalar code
@@ -21,8 +21,18 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jit import JIT
+from ..models import hertz
+from ..models.tip_mass import (
+    Coefficients,
+    contact_force,
+    derivatives,
+    free_step_map,
+    in_contact,
+    rk4,
+    voltage_rate,
+)
 from . import booking, hermite, steady, stop_motion
-from .flags import JIT
 from .layouts import (
     ACC,
     BLOCK,
@@ -36,15 +46,6 @@ from .layouts import (
     PARAM,
     STATE,
     STATUS,
-)
-from .model import (
-    Coefficients,
-    contact_force,
-    derivatives,
-    free_step_map,
-    in_contact,
-    rk4,
-    voltage_rate,
 )
 from .rk4 import GRADED, WHOLE, pieces, switch_step
 from .steady import MAX_ORBIT_PERIOD
@@ -145,7 +146,7 @@ def load(L, j, p, y, it):
     elif x < L[LANE.flip_below + j]:
         mirror(L, j)
     x, v, g, ch = L[LANE.x + j], L[LANE.v + j], L[LANE.gap + j], L[LANE.ch + j]
-    on = 1.0 if p[PARAM.locate] == 0.0 or (x - xs > g and 1.0 + ch * (v - vs) > 0.0) else 0.0
+    on = 1.0 if p[PARAM.locate] == 0.0 or in_contact(x - xs, v - vs, g, ch) else 0.0
     L[LANE.on + j], L[LANE.stop_on + j] = (0.0, on) if moving else (on, 0.0)
     L[LANE.fine + j] = 0.0
     L[LANE.periods + j] = 0.0
@@ -163,8 +164,8 @@ def _start_period(L, j, it):
     update, in the lane loop."""
     x, v, V = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j]
     xs, vs = L[LANE.stop_x + j], L[LANE.stop_v + j]  # (0 for a rigid stop: the same bits)
-    fc = stop_motion.force(x, v, xs, vs, max(L[LANE.on + j], L[LANE.stop_on + j])
-                           * L[LANE.kh + j], L[LANE.gap + j], L[LANE.ch + j])
+    fc = contact_force(x - xs, v - vs, max(L[LANE.on + j], L[LANE.stop_on + j])
+                       * L[LANE.kh + j], L[LANE.gap + j], L[LANE.ch + j])
     L[LANE.stop_x_max + j] = abs(xs)
     L[LANE.fc_peak_min + j], L[LANE.fc_peak_max + j] = np.inf, -np.inf
     L[LANE.near_miss + j], L[LANE.vimp_min + j] = np.inf, np.inf
@@ -223,7 +224,7 @@ def lane_steps(L, groups, it):
 
     The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
     vectors), written out with constant bounds so that it compiles to vector code only.
-    A lane out of contact steps by the RK4 step's linear map (model.free_step_map, 15
+    A lane out of contact steps by the RK4 step's linear map (tip_mass.free_step_map, 15
     multiply-adds and 3 adds); a group with a lane in contact also runs the RK4 stages with the
     contact force, and each lane takes the one that applies to it, so that a point gets
     the same bits whatever its neighbours. Two groups rather than one block of LANES,
@@ -551,7 +552,7 @@ def _finish_rigid(L, j):
         )
         # Up to the switch with the old contact state (graded towards a separation; else
         # one sub-step, Newton's last when it converged)...
-        graded = on == 1.0 and kind == 1
+        graded = on == 1.0 and kind == hertz.TOUCH
         if graded or not done:
             xe, ve, Ve, q1 = pieces(
                 x,
@@ -568,7 +569,7 @@ def _finish_rigid(L, j):
                 A,
                 before,
             )
-        onset = on == 0.0 and kind == 1
+        onset = on == 0.0 and kind == hertz.TOUCH
         if onset:
             ch = booking.impact(L, j, ve, ch)
         on = 1.0 - on

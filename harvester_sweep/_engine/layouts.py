@@ -6,12 +6,16 @@ reads a global named tuple as a constant, so that each offset is a constant in t
 compiled code (what lets LLVM see that the lane loop's loads and stores never overlap,
 and vectorize it). Sizes are ``len(LAYOUT)``, never written out.
 
-Pure Python, no imports from the package: the layers above read the same layouts.
+Pure Python; the state's fields come from the model's declaration (harvester_sweep.models),
+the layer below. The layers above read the same layouts.
 """
 
 from __future__ import annotations
 
 from collections import namedtuple
+
+from ..models import tip_mass
+from ..models.state import describe
 
 
 def _layout(name: str, fields: tuple, stride: int = 1):
@@ -23,19 +27,14 @@ def _layout(name: str, fields: tuple, stride: int = 1):
     return cls(*range(0, len(names) * stride, stride))
 
 
-#: A point's state; also the columns of a stroboscopic sample (the first three).
-STATE = _layout("State", (
-    ("x", "tip displacement relative to the base [m]"),
-    ("v", "tip velocity [m/s]"),
-    ("voltage", "voltage across the load [V]"),
-    ("stop_x", "displacement of a moving stop relative to the base [m] (0: rigid stop)"),
-    ("stop_v", "velocity of a moving stop [m/s]"),
-    ("approach_velocity", "approach velocity latched at the last first touch [m/s]"),
-))
+#: A point's state (the model's, then a moving stop's, then the latched velocity); also the
+#: columns of a stroboscopic sample (all but the last).
+STATE = _layout("State", describe(tip_mass.STATE + tip_mass.STOP_STATE + (tip_mass.LATCHED,)))
 #: Columns of a stroboscopic sample y(nT): the state without the latched velocity.
-N_STROBE = STATE.approach_velocity
-#: Components of the period map of a point with a rigid stop: x, v, V (its stop stays at 0).
-N_RIGID = STATE.stop_x
+N_STROBE = len(tip_mass.STATE) + len(tip_mass.STOP_STATE)
+#: Components of the period map of a point with a rigid stop: the model's (its stop stays
+#: at 0).
+N_RIGID = len(tip_mass.STATE)
 
 #: A point's parameter row, as the engine reads it (made by harvester_sweep.packing).
 PARAM = _layout("ParameterRow", (
@@ -208,7 +207,7 @@ LANE = _layout("LaneTable", (
     # extremum where v vn or dV/dt dVn/dt is at most turn_floor, for a force peak where
     # the force a step before the peak exceeds -turn_floor
     ("turn_floor", "0: extrema and force peaks booked; -inf: not"),
-    # ... the contact-free step as the linear map it is (model.free_step_map): the
+    # ... the contact-free step as the linear map it is (tip_mass.free_step_map): the
     # increments of x, v, V (rows) from (x, v, V, sin, cos) at its start (columns) ...
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),
     ("mvx", ""), ("mvv", ""), ("mve", ""), ("mvs", ""), ("mvc", ""),

@@ -1,6 +1,6 @@
 """A point's period map where its motion stays clear of the stops, in closed form.
 
-There the model is linear and so is its RK4 step (model.free_step_map): deviations of
+There the model is linear and so is its RK4 step (tip_mass.free_step_map): deviations of
 ``(x, v, V)`` are carried by the step's matrix ``I + D`` (D's first three columns), and
 over ``N`` steps by its power, taken here by repeated squaring (:func:`free_monodromy`).
 The orbit solver uses it as the Jacobian of Newton's first run where that run is expected
@@ -15,9 +15,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .flags import JIT
+from ..jit import JIT
+from ..models.tip_mass import free_step_map
 from .layouts import PARAM, STATE
-from .model import free_step_map
 
 
 @njit(inline="always", **JIT)

@@ -12,9 +12,10 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jit import JIT
+from ..models import hertz
+from ..models.tip_mass import Coefficients, derivatives, rk4
 from . import hermite
-from .flags import JIT
-from .model import Coefficients, derivatives, rk4
 
 
 @njit(inline="always", **JIT)
@@ -80,22 +81,22 @@ def switch_step(x, v, V, a0, xn, vn, Vn, s0, c0, n_steps, h, A, k):
     separation) or of 1 + c_h v (the no-tension clip), first placed on the cubic Hermite
     interpolant of the trial step, then refined by Newton on RK4 sub-steps. The caller
     integrates up to the switch with the old contact state and after it with the new one.
-    Returns the kind of switch (1: x = g, 2: 1 + c_h v = 0, 0: already across at the
-    start of the step), the switch time as a fraction theta of the step, whether Newton
-    converged, and then x, v, V and int V^2 dt at the end of its last sub-step, which ends
-    at theta (the caller keeps them rather than step there again).
+    Returns the kind of switch (hertz.TOUCH: x = g, hertz.CLIP: 1 + c_h v = 0, 0: already
+    across at the start of the step), the switch time as a fraction theta of the step,
+    whether Newton converged, and then x, v, V and int V^2 dt at the end of its last
+    sub-step, which ends at theta (the caller keeps them rather than step there again).
     """
     g, ch = k.g, k.ch
     w = math.pi / n_steps  # forcing phase per half step
     f_end = forcing(A, s0, c0, 2.0 * w)
     theta, kind = 2.0, 0
     if (x - g) * (xn - g) < 0.0:
-        theta, kind = hermite.root(x, v, xn, vn, h, g), 1
-    if (1.0 + ch * v) * (1.0 + ch * vn) < 0.0:
+        theta, kind = hermite.root(x, v, xn, vn, h, g), hertz.TOUCH
+    if hertz.clip(v, ch) * hertz.clip(vn, ch) < 0.0:
         a_end, _ = derivatives(xn, vn, Vn, f_end, k)
-        s2 = hermite.root(v, a0, vn, a_end, h, -1.0 / ch)
+        s2 = hermite.root(v, a0, vn, a_end, h, hertz.clip_rate(ch))
         if s2 < theta:
-            theta, kind = s2, 2
+            theta, kind = s2, hertz.CLIP
     if kind == 0:  # no sign change in the step: the state was already across at its start
         theta = 0.0
     f0 = A * s0
@@ -104,11 +105,11 @@ def switch_step(x, v, V, a0, xn, vn, Vn, s0, c0, n_steps, h, A, k):
         dt = theta * h
         xe, ve, Ve, qe, _ = rk4(x, v, V, dt, f0, forcing(A, s0, c0, w * theta),
                                 forcing(A, s0, c0, 2.0 * w * theta), k)
-        if kind == 1:
+        if kind == hertz.TOUCH:
             residual, rate = xe - g, ve
-        elif kind == 2:
+        elif kind == hertz.CLIP:
             ae, _ = derivatives(xe, ve, Ve, forcing(A, s0, c0, 2.0 * w * theta), k)
-            residual, rate = 1.0 + ch * ve, ch * ae
+            residual, rate = hertz.clip(ve, ch), ch * ae
         else:
             break
         if rate == 0.0:

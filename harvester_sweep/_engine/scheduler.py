@@ -22,8 +22,8 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ..jit import JIT
 from . import lanes
-from .flags import JIT
 from .layouts import ACC, GROUP, LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
 from .monodromy import free_extent, free_monodromy
 from .steady import GAP_HISTORY, MAX_ORBIT_PERIOD

@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .flags import JIT
+from ..jit import JIT
 from .layouts import ACC, METRIC, PARAM, STATE
 
 MAX_ORBIT_PERIOD = 16  # longest orbit period p looked for, in forcing periods

@@ -25,10 +25,11 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from ..jit import JIT
+from ..models import hertz
+from ..models.tip_mass import contact_force, in_contact, voltage_rate
 from . import booking, hermite
-from .flags import JIT
 from .layouts import LANE
-from .model import contact_force, in_contact, voltage_rate
 from .rk4 import GRADED, THETA_TOL, WHOLE, forcing
 
 #: The coefficients of a point with a moving stop: the tip's (model.Coefficients) and
@@ -48,13 +49,6 @@ def coupled_derivatives(x, v, V, xs, vs, f, k, on):
     a = f - k.wn2 * x + k.thm * V - k.cm * v - fm
     a_s = f - k.swn2 * xs - k.scm * vs + fm * k.ratio
     return a, a_s, -k.irc * V - k.thc * v
-
-
-@njit(inline="always", **JIT)
-def force(x, v, xs, vs, kh_on, g, ch):
-    """Contact force F_c [N] of the relative motion (the model's Hertz law); ``kh_on`` is
-    k_h [N/m^1.5] in contact, 0 out of it."""
-    return contact_force(x - xs, v - vs, kh_on, g, ch)
 
 
 @njit(**JIT)
@@ -113,7 +107,8 @@ def _touching(y, k):
 @njit(**JIT)
 def _switch(y, yn, s0, c0, n_steps, h, A, k, on):
     """The earliest contact switch inside the step from ``y`` to ``yn`` (taken with
-    contact state ``on``): 1 on x - x_s = g, 2 on 1 + c_h (v - v_s) = 0, 0 already
+    contact state ``on``): hertz.TOUCH on x - x_s = g, hertz.CLIP on 1 + c_h (v - v_s) = 0,
+    0 already
     across at the start; its time as a fraction of the step, first on the cubic Hermite
     interpolant of the relative motion, then by Newton on RK4 sub-steps (rk4.switch_step
     for the rigid stop)."""
@@ -123,24 +118,24 @@ def _switch(y, yn, s0, c0, n_steps, h, A, k, on):
     d0, d1, r0, r1 = x - xs - k.g, xn - xsn - k.g, v - vs, vn - vsn
     theta, kind = 2.0, 0
     if d0 * d1 < 0.0:
-        theta, kind = hermite.root(d0, r0, d1, r1, h, 0.0), 1
-    if (1.0 + k.ch * r0) * (1.0 + k.ch * r1) < 0.0:
+        theta, kind = hermite.root(d0, r0, d1, r1, h, 0.0), hertz.TOUCH
+    if hertz.clip(r0, k.ch) * hertz.clip(r1, k.ch) < 0.0:
         a0, b0, _ = coupled_derivatives(x, v, V, xs, vs, A * s0, k, on)
         a1, b1, _ = coupled_derivatives(xn, vn, Vn, xsn, vsn, forcing(A, s0, c0, 2.0 * w), k, on)
-        s2 = hermite.root(r0, a0 - b0, r1, a1 - b1, h, -1.0 / k.ch)
+        s2 = hermite.root(r0, a0 - b0, r1, a1 - b1, h, hertz.clip_rate(k.ch))
         if s2 < theta:
-            theta, kind = s2, 2
+            theta, kind = s2, hertz.CLIP
     if kind == 0:
         return 0, 0.0
     for _ in range(4):  # Newton on the sub-step length
         f1 = forcing(A, s0, c0, 2.0 * w * theta)
         e = coupled_rk4(x, v, V, xs, vs, theta * h, A * s0, forcing(A, s0, c0, w * theta), f1,
                         k, on)
-        if kind == 1:
+        if kind == hertz.TOUCH:
             residual, rate = e[0] - e[3] - k.g, e[1] - e[4]
         else:
             a, b, _ = coupled_derivatives(e[0], e[1], e[2], e[3], e[4], f1, k, on)
-            residual, rate = 1.0 + k.ch * (e[1] - e[4]), k.ch * (a - b)
+            residual, rate = hertz.clip(e[1] - e[4], k.ch), k.ch * (a - b)
         if rate == 0.0:
             break
         step = residual / (rate * h)
@@ -182,10 +177,10 @@ def step(L, j):
         if _touching(yn, k) != (on == 1.0):
             kind, theta = _switch(y, yn, s0, c0, n_steps, h, A, k, on)
             # up to the switch with the old contact state (graded towards a separation)...
-            graded = on == 1.0 and kind == 1
+            graded = on == 1.0 and kind == hertz.TOUCH
             ye, q1 = coupled_pieces(y, 0.0, theta, GRADED if graded else WHOLE, True, s0, c0,
                             n_steps, h, A, k, on)
-            onset = on == 0.0 and kind == 1
+            onset = on == 0.0 and kind == hertz.TOUCH
             if onset:
                 ch = booking.impact(L, j, ye[1] - ye[4], ch)
                 k = _with_damping(k, ch)
@@ -196,7 +191,7 @@ def step(L, j):
             dq = q1 + q2
     xn, vn, Vn, xsn, vsn = yn
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
-    fcn = force(xn, vn, xsn, vsn, on * kh, g, ch)
+    fcn = contact_force(xn - xsn, vn - vsn, on * kh, g, ch)  # of the relative motion
     booking.extrema(L, j, x, v, V, voltage_rate(V, v, irc, thc), xn, vn, Vn,
                     voltage_rate(Vn, vn, irc, thc), h, fcp, fc, fcn, True, np.inf)
     smax = max(L[LANE.stop_x_max + j], abs(xsn))

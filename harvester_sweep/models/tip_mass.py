@@ -1,31 +1,54 @@
-"""The model, declared once: its state, right-hand side, contact and contact-free step.
+"""The tip-mass model, declared once: its state, right-hand side, contact surfaces,
+contact-free step, linear system and energy.
 
-State ``(x, v, V)`` (layouts.STATE; the latched approach velocity rides along): tip
-displacement relative to the base [m], velocity [m/s], voltage across the load [V]::
+State ``(x, v, V)`` (:data:`STATE`): tip displacement relative to the base [m],
+velocity [m/s], voltage across the load [V]::
 
     x'' = A sin(w t) - wn^2 x - (c/m) x' + (theta/m) V - F_c / m
     V'  = -V / (R C_p) - (theta / C_p) x'
-    F_c = k_h delta^1.5 max(1 + c_h x', 0),   delta = max(x - g, 0)
+    F_c = the Hertz law (:mod:`.hertz`) at delta = x - g and rate x'
 
-The contact has two surfaces, where its force switches on or off: ``x = g`` (touch and
-separation) and ``1 + c_h x' = 0`` (the no-tension clip: the stop pushes, never pulls).
-Between them the force is smooth, so the RK4 steps in :mod:`.rk4` keep their order once
-every switch is located inside its step. Out of contact the system is linear, and so is
-its RK4 step (:func:`free_step_map`).
+Options of the same model, each adding to the declaration: a second stop below, at
+``x = -g_l`` (the engine mirrors the state towards it, so its law is the same function);
+a stop on a spring (:data:`STOP_STATE`, its equations in the engine's stop_motion). The
+latched approach velocity of the contact law rides along with the state (:data:`LATCHED`).
 
-A point's coefficients travel as one :data:`Coefficients` tuple (``k``), in the units of
-layouts.PARAM; ``khm`` is 0 for a point out of contact.
+Out of contact the system is linear (:func:`linear_system`), and so is its RK4 step
+(:func:`free_step_map`). A point's coefficients travel as one :data:`Coefficients` tuple
+(``k``); ``khm`` is 0 for a point out of contact.
+
+What is derived from this declaration: the engine's state rows and their sizes
+(``_engine.layouts``), the orbits' component scales (``period_map.orbit_scales``), the
+basins' box, the no-contact proof's bound (``acceptance``), the closed-form linear
+response (``linear``) and the tests' SciPy reference.
 """
 
 from __future__ import annotations
 
-import math
 from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from .flags import JIT
+from ..jit import JIT
+from . import hertz
+from .state import Component
+
+#: The state the period map acts on, in order.
+STATE = (
+    Component("x", "m", "displacement", "tip displacement relative to the base"),
+    Component("v", "m/s", "velocity", "tip velocity"),
+    Component("voltage", "V", "voltage", "voltage across the load"),
+)
+#: What a stop on a spring adds to the state (zero for a rigid stop).
+STOP_STATE = (
+    Component("stop_x", "m", "displacement",
+              "displacement of a moving stop relative to the base (0: rigid stop)"),
+    Component("stop_v", "m/s", "velocity", "velocity of a moving stop"),
+)
+#: Carried with the state, outside the period map: the contact law's latched velocity.
+LATCHED = Component("approach_velocity", "m/s", "velocity",
+                    "approach velocity latched at the last first touch")
 
 #: A point's model coefficients: wn^2 [1/s^2], c/m [1/s], theta/m [N/(V kg)],
 #: k_h/m [N/(m^1.5 kg)] (0: no contact force), g [m], c_h [s/m], 1/(R C_p) [1/s],
@@ -38,15 +61,11 @@ def derivatives(x, v, V, f, k, contact=True):
     """Acceleration [m/s^2] and dV/dt [V/s] at forcing acceleration ``f`` [m/s^2].
 
     ``contact=False`` (a constant at the call) leaves the contact term out of the code: the
-    same bits as khm = 0, without its square root. The square root comes last, times a
-    factor computed while it runs: from one RK4 stage to the next the chain of dependent
-    operations (x, x - g, the root, one multiply-add) is then as short as it can be, which
-    is what a lone step in contact waits on.
+    same bits as khm = 0, without its square root.
     """
     a = f - k.wn2 * x + k.thm * V - k.cm * v
     if contact:
-        d = max(x - k.g, 0.0)
-        a = a - k.khm * d * max(1.0 + k.ch * v, 0.0) * math.sqrt(d)
+        a = a - hertz.force(k.khm, x - k.g, v, k.ch)
     return a, -k.irc * V - k.thc * v
 
 
@@ -58,16 +77,16 @@ def voltage_rate(V, v, irc, thc):
 
 @njit(inline="always", **JIT)
 def in_contact(x, v, g, ch):
-    """Whether the stop pushes at (x [m], v [m/s]): past both contact surfaces."""
-    return (x > g) & (1.0 + ch * v > 0.0)
+    """Whether the stop at gap g [m] pushes at (x [m], v [m/s]): past both contact
+    surfaces."""
+    return hertz.pushes(x - g, v, ch)
 
 
 @njit(inline="always", **JIT)
 def contact_force(x, v, kh_on, g, ch):
     """Contact force F_c [N] at (x [m], v [m/s]); ``kh_on`` is k_h [N/m^1.5] in contact,
     0 out of it."""
-    d = max(x - g, 0.0)
-    return kh_on * d * math.sqrt(d) * max(1.0 + ch * v, 0.0)
+    return hertz.force(kh_on, x - g, v, ch)
 
 
 @njit(inline="always", **JIT)
@@ -125,3 +144,40 @@ def free_step_map(h, ca, sa, A, wn2, cm, thm, irc, thc):
         out[0, i], out[1, i], out[2, i], _, _ = rk4_increment(
             x, v, V, h, A * s0, A * sm, A * (sm * ca + cmid * sa), k, False)
     return out
+
+
+def linear_system(mass, natural_frequency, damping_ratio, coupling, capacitance, resistance,
+                  **_):
+    """The model clear of its stops as ``y' = M y + b a(t)``, y = (x, v, V) and a(t) the
+    base acceleration [m/s^2]: returns M (3 x 3; [1/s], [1/s^2], [N/(V kg)], [V s/m])
+    and b (3,) [-]. Parameters in SI units (mass [kg], natural_frequency [Hz],
+    damping_ratio [-], coupling [N/V], capacitance [F], resistance [Ohm]); any may be an
+    array (then M is (..., 3, 3), b (3,)). ``**_``: other parameters, ignored."""
+    wn = 2.0 * np.pi * np.asarray(natural_frequency, dtype=float)
+    shape = np.broadcast(wn, mass, damping_ratio, coupling, capacitance, resistance).shape
+    m = np.zeros(shape + (3, 3))
+    m[..., 0, 1] = 1.0
+    m[..., 1, 0] = -wn * wn
+    m[..., 1, 1] = -2.0 * damping_ratio * wn
+    m[..., 1, 2] = np.divide(coupling, mass)
+    m[..., 2, 1] = -np.divide(coupling, capacitance)
+    m[..., 2, 2] = -1.0 / (np.asarray(resistance) * capacitance)
+    return m, np.array([0.0, 1.0, 0.0])
+
+
+def excursion_bound(e, wn2, thm, thc):
+    """The largest displacement [m] a free, decaying motion from deviation ``e`` (..., 3)
+    [m, m/s, V] ever reaches, by energy: the homogeneous motion loses
+    ``E = (k x^2 + m v^2 + C_p V^2) / 2`` (``dE/dt = -c v^2 - V^2 / R``), so
+    ``|x| <= sqrt(2 E / k)``; wn2 = k/m [1/s^2], thm = theta/m, thc = theta/C_p (their
+    ratio is C_p/m; 0 for thc 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cv = np.where(thc != 0, thm / thc, 0.0)
+    return np.sqrt(e[..., 0] ** 2 + (e[..., 1] ** 2 + cv * e[..., 2] ** 2) / wn2)
+
+
+def stop_excursion_bound(e, stop_wn2):
+    """The same bound [m] for a moving stop's own transient from its deviation ``e``
+    (..., 2) [m, m/s]: ``k_s x_s^2 + m_s v_s^2`` decays; stop_wn2 = k_s/m_s [1/s^2]."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.sqrt(e[..., 0] ** 2 + e[..., 1] ** 2 / stop_wn2)

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from harvester_sweep import packing, resolve_parameters
-from harvester_sweep._engine import PARAM, hermite, model
+from harvester_sweep._engine import PARAM, hermite
+from harvester_sweep.models import tip_mass as model
 
 
 @pytest.mark.parametrize("preset", ["paper", "strong_coupling"])

@@ -8,7 +8,7 @@ import pytest
 
 from harvester_sweep import packing, resolve_parameters
 from harvester_sweep._engine import LANE, LANES, PARAM, lanes, rk4
-from harvester_sweep._engine.model import Coefficients
+from harvester_sweep.models.tip_mass import Coefficients
 
 QUARTERS = np.full(4, 0.25)
 

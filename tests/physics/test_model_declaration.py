@@ -1,0 +1,86 @@
+"""The tip-mass model's declaration (harvester_sweep.models) against independent forms: the
+textbook phasor solution, the compiled right-hand side, the Hertz law's closed forms and a
+SciPy integration of the free motion that the energy bound must contain."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from harvester_sweep import resolve_parameters
+from harvester_sweep.linear import linear_response
+from harvester_sweep.models import hertz, tip_mass
+
+
+def _textbook(p, frequency):
+    """X and V of the harvester without its stop, in closed form (docs/model.md)."""
+    m, wn = p["mass"], 2 * np.pi * p["natural_frequency"]
+    w = 2 * np.pi * np.asarray(frequency)
+    k, c = m * wn**2, 2 * p["damping_ratio"] * m * wn
+    load = 1 + 1j * w * p["resistance"] * p["capacitance"]
+    X = m * p["amplitude"] / (k - m * w**2 + 1j * w * c
+                              + 1j * w * p["coupling"] ** 2 * p["resistance"] / load)
+    return X, -1j * w * p["coupling"] * p["resistance"] * X / load
+
+
+@pytest.mark.parametrize("preset", ["paper", "strong_coupling"])
+def test_linear_response_is_the_textbook_phasor(preset):
+    p = resolve_parameters(preset)
+    f = np.linspace(0.3, 3.0, 41) * p["natural_frequency"]
+    X, V = linear_response(**{**p, "frequency": f})
+    X0, V0 = _textbook(p, f)
+    assert np.allclose(X, X0, rtol=1e-12, atol=0) and np.allclose(V, V0, rtol=1e-12, atol=0)
+    # parameters broadcast against each other, as the closed form's do
+    R = np.array([1e3, 1e5])[:, None]
+    X, V = linear_response(**{**p, "frequency": f, "resistance": R})
+    X0, V0 = _textbook({**p, "resistance": R}, f)
+    assert X.shape == (2, 41) and np.allclose(V, V0, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("preset", ["paper", "strong_coupling"])
+def test_linear_system_is_the_compiled_right_hand_side_off_the_stop(preset):
+    p = resolve_parameters(preset)
+    M, b = tip_mass.linear_system(**p)
+    wn2, cm = M[1, 0] * -1, M[1, 1] * -1
+    k = tip_mass.Coefficients(wn2, cm, M[1, 2], 1e9, 1.0, 0.0, -M[2, 2], -M[2, 1])
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        y = rng.normal(size=3) * np.array([1e-6, 1e-3, 1.0])
+        f = rng.normal()
+        a, dV = tip_mass.derivatives(*y, f, k)  # x far below the stop at g = 1 m
+        expected = M @ y + b * f
+        assert np.allclose([y[1], a, dV], expected, rtol=1e-13, atol=0)
+
+
+def test_hertz_law_closed_form_clip_and_switches():
+    kh, ch = 3.4e9, 250.0
+    for delta, rate in [(2e-7, 1e-3), (2e-7, -1e-3), (2e-7, -5e-3), (-1e-7, 1e-3), (0.0, 1.0)]:
+        expected = kh * max(delta, 0) ** 1.5 * max(1 + ch * rate, 0)
+        assert hertz.force(kh, delta, rate, ch) == pytest.approx(expected, rel=1e-15, abs=0)
+        # the stop pushes exactly where the force is on: past both surfaces
+        assert hertz.pushes(delta, rate, ch) == (expected > 0)
+    assert hertz.clip(hertz.clip_rate(ch), ch) == pytest.approx(0.0, abs=1e-15)
+    # stored energy 2/5 k_h delta^2.5, and the linearised spring dF/d delta
+    delta = hertz.penetration(1.7e-9, kh)
+    assert 0.4 * kh * delta**2.5 == pytest.approx(1.7e-9, rel=1e-13)
+    d = 1e-3 * delta
+    slope = (hertz.static_force(kh, delta + d) - hertz.static_force(kh, delta - d)) / (2 * d)
+    assert hertz.stiffness(kh, delta) == pytest.approx(slope, rel=1e-6)
+
+
+@pytest.mark.parametrize("preset", ["paper", "strong_coupling"])
+def test_excursion_bound_contains_the_free_motion(preset):
+    """No free, decaying motion from a deviation goes beyond the energy bound (SciPy)."""
+    p = resolve_parameters(preset)
+    M, _ = tip_mass.linear_system(**p)
+    wn2, thm, thc = -M[1, 0], M[1, 2], -M[2, 1]
+    rng = np.random.default_rng(7)
+    T = 1 / p["natural_frequency"]
+    for _ in range(5):
+        e = rng.normal(size=3) * np.array([1e-6, 1e-6 * math.sqrt(wn2), 1e-6 * thc])
+        run = solve_ivp(lambda t, y: M @ y, (0, 20 * T), e, rtol=1e-10, atol=1e-20,
+                        max_step=T / 50)
+        bound = tip_mass.excursion_bound(e, wn2, thm, thc)
+        assert np.abs(run.y[0]).max() <= bound * (1 + 1e-9)
+        assert np.abs(run.y[0]).max() >= 0.3 * bound  # a bound, not a blanket
