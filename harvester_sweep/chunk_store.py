@@ -58,6 +58,9 @@ class MemoryStore:
     def load(self, chunk):
         return self.chunks[chunk]
 
+    def kept_text(self) -> str:
+        return "nothing is kept without an output file"
+
 
 class ChunkStore:
     """Chunk results saved as ``<output>.partial/chunk_NNNNNN.npz``, each sealed, beside a
@@ -177,6 +180,16 @@ class ChunkStore:
                           f"{self.dir}: make room (or fix the folder) and run the same "
                           "command with --resume")
 
+    def kept_text(self) -> str:
+        """What a run that stops now leaves for --resume, in words; a partial result that
+        holds no finished chunk is removed (it would only be in the way)."""
+        kept = len(list(self.dir.glob("chunk_*.json"))) if self.dir.is_dir() else 0
+        if not kept:
+            self.remove()
+            return "no chunk was finished"
+        return (f"the {kept} finished chunks are kept in {self.dir}: run the same command "
+                "with --resume")
+
     def load(self, chunk) -> dict | None:
         """Chunk ``chunk``'s arrays, or None when it is missing or fails its check."""
         data = self._verified(chunk)
@@ -202,6 +215,32 @@ class ChunkStore:
 
     def remove(self) -> None:
         shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def write_failure(path, error: OSError, size: int | None = None) -> str:
+    """Why ``path`` could not be written, in words: the system's reason, or, where the
+    library gives none (netCDF4 reports every refusal of HDF5, a full disk included, as
+    "NetCDF: HDF error"), its text with the free space on the disk against the ``size``
+    [bytes] of the data."""
+    if error.strerror:
+        return error.strerror
+    text = str(error) or type(error).__name__
+    try:
+        free = shutil.disk_usage(Path(path).parent).free
+    except OSError:
+        return text
+    if size is None:
+        return f"{text} (no cause given; {_bytes(free)} free on the disk)"
+    full = "the disk is full: " if free < size else ""
+    return f"{text} (no cause given; {full}{_bytes(free)} free on the disk for about " \
+           f"{_bytes(size)} of data)"
+
+
+def _bytes(count: int) -> str:
+    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if count >= size:
+            return f"{count / size:.3g} {unit}"
+    return f"{count} B"
 
 
 def _write_atomic(path: Path, data: bytes) -> None:

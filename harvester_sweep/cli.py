@@ -206,10 +206,12 @@ def _scene(args) -> int:
 def _writing(path: str):
     """Turn a file that cannot be written (no folder, no permission, a full disk) into one
     line, exit 2."""
+    from .chunk_store import write_failure
+
     try:
         yield
     except OSError as error:
-        raise ParameterError(f"cannot write {path}: {error.strerror or error}") from None
+        raise ParameterError(f"cannot write {path}: {write_failure(path, error)}") from None
 
 
 _FIGURES = (".png", ".pdf", ".svg")

@@ -9,13 +9,14 @@ the chunks missing or damaged. The netCDF file is written aside and renamed when
 
 from __future__ import annotations
 
+import numbers
 import sys
 
 from tqdm import tqdm
 
-from .chunk_store import ChunkStore, MemoryStore, StoreError
+from .chunk_store import ChunkStore, MemoryStore, StoreError, write_failure
 from .chunks import chunk_points, compute_chunk
-from .parameters import ParameterError
+from .parameters import ParameterError, is_number, value_text
 from .run_estimate import LONG_RUN_SECONDS, estimate
 from .sweep_file import load_sweep
 
@@ -60,12 +61,24 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     StoreError
         (a ParameterError) When the output or a chunk cannot be written (no permission, a
         full disk); the finished chunks are kept for ``resume``.
+    cluster.ClusterError
+        (a ParameterError) When dask cannot finish the chunks (workers that keep dying,
+        none left); the finished chunks are kept for ``resume``.
     """
     spec = load_sweep(sweep)
+    if output is not None and not str(output).lower().endswith(".nc"):
+        raise ParameterError(f"output = {str(output)!r}: the file name must end in .nc (the "
+                             "file is netCDF)")
     if workers is not None and scheduler is not None:
         raise ParameterError("give workers or scheduler, not both")
-    if workers is not None and workers < 1:
-        raise ParameterError(f"workers = {workers!r}: must be an integer >= 1")
+    if workers is not None:
+        if not is_number(workers) or not isinstance(workers, numbers.Integral) or workers < 1:
+            raise ParameterError(f"workers [-] = {value_text(workers)}: must be an integer >= 1")
+        workers = int(workers)
+    if scheduler is not None:
+        from .cluster import check_scheduler
+
+        check_scheduler(scheduler)
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
     with store:  # (holds the output's lock until the file is written)
         finished = [chunk for chunk in store.present() if store.has(chunk)]
@@ -102,7 +115,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
             try:
                 write_netcdf(ds, output)
             except OSError as error:
-                raise store.unwritten(output, error.strerror or str(error)) from None
+                raise store.unwritten(output, write_failure(output, error, ds.nbytes)) \
+                    from None
             store.remove()
     return ds
 

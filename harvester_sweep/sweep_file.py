@@ -321,7 +321,10 @@ def axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
         values, spacing = _range(key, entry).tolist(), entry.get("scale", "linear")
     elif isinstance(entry, (list, tuple, np.ndarray)):
         # (a TOML array as it is: a nested one is refused below, not flattened)
-        values = list(entry) if isinstance(entry, (list, tuple)) else np.ravel(entry).tolist()
+        if isinstance(entry, np.ndarray) and entry.ndim != 1:
+            raise ParameterError(f"{key}: an array of shape {entry.shape}; an axis is one list "
+                                 "of values (one axis per parameter)")
+        values = list(entry) if isinstance(entry, (list, tuple)) else entry.tolist()
         spacing = "list"
         if not values:
             raise ParameterError(f"{key}: the list of values is empty")

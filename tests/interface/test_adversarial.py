@@ -1,0 +1,180 @@
+"""Faults and bad input found by trying the tool as an adversarial user would (issue 46):
+workers that keep dying, bad addresses and types from Python, files the tool did not
+write, Ctrl-C outside a sweep, grids too large to count, and the files a run cannot write.
+Each ends in one line (exit 2, or 130 for Ctrl-C) and keeps the finished work."""
+
+from __future__ import annotations
+
+import errno
+import os
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from harvester_sweep import chunk_store, cli, cluster, datasets
+from harvester_sweep.parameters import ParameterError
+from harvester_sweep.sweep import run_sweep
+from harvester_sweep.sweep_file import load_sweep
+from tests.helpers import assert_same_bits, spec
+
+SWEEP = spec({"frequency": [200.0, 230.0, 260.0], "gap": [1e-6, 2e-6]},
+             directions=["up", "down"], chunk_size=3)  # 4 chunks of one line
+
+
+@pytest.fixture(scope="module")
+def whole():
+    """The sweep run without a fault, in memory."""
+    return run_sweep(SWEEP, progress=False)
+
+
+def _one_line(capsys) -> str:
+    err = [line for line in capsys.readouterr().err.splitlines()
+           if "compiling the RK4 kernel" not in line]  # (said when the cache is cold)
+    assert len(err) == 1, err
+    return err[0]
+
+
+# -- 1: dask workers that keep dying, or none left ---------------------------------------
+
+def test_workers_that_keep_dying_end_in_one_line_and_keep_the_finished_chunks(
+        tmp_path, monkeypatch, whole):
+    dask = pytest.importorskip("dask")
+    pytest.importorskip("dask.distributed")
+    compute = cluster.compute_chunk
+    out = tmp_path / "fr.nc"
+    sealed = tmp_path / "fr.nc.partial" / "chunk_000000.json"
+
+    def dies_after_chunk_0(spec, chunk, *args):  # (a closure: sent to the worker by value)
+        if chunk != 0:
+            # Once chunk 0 is saved (a result still held by a worker dies with it); the
+            # chunks run in the order they were given, so this waits only for chunk 0.
+            deadline = time.monotonic() + 120
+            while not sealed.exists() and time.monotonic() < deadline:
+                time.sleep(0.05)
+            os._exit(1)  # as a worker killed by the kernel's OOM killer or kill -9
+        return compute(spec, chunk, *args)
+
+    monkeypatch.setattr(cluster, "compute_chunk", dies_after_chunk_0)
+    # (dask gives up on a task after it killed this many workers more: 0 keeps it short)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with pytest.raises(cluster.ClusterError) as raised:
+            run_sweep(SWEEP, out, workers=1, progress=False)
+    message = str(raised.value)
+    assert len(message.splitlines()) == 1
+    assert "3 of 4 chunks did not come back" in message and "kept dying" in message
+    assert "the 1 finished chunks are kept" in message and "--resume" in message
+    assert not out.exists()
+    monkeypatch.undo()
+    assert_same_bits(run_sweep(SWEEP, out, resume=True, progress=False), whole)
+
+
+def test_a_cluster_with_no_worker_left_is_given_up_not_waited_on_for_ever(tmp_path,
+                                                                          monkeypatch):
+    pytest.importorskip("dask.distributed")
+    from dask.distributed import LocalCluster
+
+    monkeypatch.setattr(cluster, "NO_WORKERS_SECONDS", 0.5)
+    outcome = {}
+
+    def run(address):
+        try:
+            run_sweep(SWEEP, tmp_path / "fr.nc", scheduler=address, progress=False)
+        except BaseException as error:  # noqa: BLE001 (handed to the test's thread)
+            outcome["error"] = error
+
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=":0") as empty:
+        # (in a thread: before the fix the run waits for ever, and the test must end)
+        thread = threading.Thread(target=run, args=(empty.scheduler_address,), daemon=True)
+        thread.start()
+        thread.join(timeout=120)
+    assert not thread.is_alive(), "the run still waits for a worker"
+    error = outcome.get("error")
+    assert isinstance(error, cluster.ClusterError), error
+    assert "no dask worker was left" in str(error) and "no chunk was finished" in str(error)
+    assert not (tmp_path / "fr.nc.partial").exists()
+
+
+# -- 7: a scheduler address that is none -------------------------------------------------
+
+@pytest.mark.parametrize("address", ["notanaddress", "tcp://host-without-port"])
+def test_a_scheduler_that_is_no_address_is_one_line_before_any_work(address, tmp_path, capsys):
+    pytest.importorskip("dask.distributed")
+    (tmp_path / "fr.toml").write_text("[grid]\nfrequency = [140.0]\n")
+    argv = ["run", str(tmp_path / "fr.toml"), "--output", str(tmp_path / "x.nc"), "--quiet",
+            "--scheduler", address]
+    assert cli.main(argv) == 2
+    line = _one_line(capsys)
+    assert f"scheduler = '{address}'" in line and "not the address" in line
+    assert not list(tmp_path.glob("x.nc*"))
+
+
+# -- 11: Python's arguments of the wrong type --------------------------------------------
+
+@pytest.mark.parametrize("workers", ["2", 1.5, 0, True, [2]])
+def test_workers_that_are_no_count_raise_parameter_error(workers):
+    with pytest.raises(ParameterError, match=r"workers \[-\] = .*: must be an integer >= 1"):
+        run_sweep(SWEEP, workers=workers, progress=False)
+
+
+def test_a_scheduler_that_is_not_text_raises_parameter_error():
+    with pytest.raises(ParameterError, match="scheduler = 8786: must be the address"):
+        run_sweep(SWEEP, scheduler=8786, progress=False)
+
+
+# -- 12: a full disk at the final write, a 2-D axis, a file name not .nc -----------------
+
+def test_a_full_disk_at_the_final_write_says_so_when_netcdf_does_not(tmp_path, capsys,
+                                                                     monkeypatch):
+    (tmp_path / "fr.toml").write_text("[parameters]\nsteps_per_period = 256\n"
+                                      "[grid]\nfrequency = [200.0, 230.0]\n")
+    out = tmp_path / "fr.nc"
+
+    def hdf_error(ds, path):  # what netCDF4 makes of HDF5's ENOSPC (datasets.write_netcdf)
+        raise OSError("NetCDF: HDF error")
+
+    monkeypatch.setattr(datasets, "write_netcdf", hdf_error)
+    monkeypatch.setattr(chunk_store.shutil, "disk_usage",
+                        lambda path: type("usage", (), {"free": 0})())
+    assert cli.main(["run", str(tmp_path / "fr.toml"), "--output", str(out), "--quiet"]) == 2
+    line = _one_line(capsys)
+    assert "NetCDF: HDF error" in line and "the disk is full: 0 B free" in line, line
+    assert "--resume" in line
+    assert len(list((tmp_path / "fr.nc.partial").glob("chunk_*.json"))) == 1
+
+
+def test_a_full_disk_under_a_branch_names_the_free_space(tmp_path, capsys, monkeypatch):
+    def hdf_error(ds, path):
+        raise OSError("NetCDF: HDF error")
+
+    monkeypatch.setattr(datasets, "write_netcdf", hdf_error)
+    monkeypatch.setattr(chunk_store.shutil, "disk_usage",
+                        lambda path: type("usage", (), {"free": 0})())
+    with pytest.raises(ParameterError, match="HDF error .*0 B free on the disk"):
+        with cli._writing(str(tmp_path / "b.nc")):
+            datasets.write_netcdf(None, tmp_path / "b.nc")
+
+
+def test_a_two_dimensional_array_as_an_axis_is_refused_not_flattened():
+    grid = {"frequency": np.array([[200.0, 210.0], [220.0, 230.0]])}
+    with pytest.raises(ParameterError, match=r"grid.frequency: an array of shape \(2, 2\)"):
+        load_sweep(spec(grid))
+    assert load_sweep(spec({"frequency": np.array([200.0, 210.0])})).n_points == 2
+
+
+@pytest.mark.parametrize("name", ["x.txt", "x.nc.bak", "x"])
+def test_run_sweep_refuses_an_output_that_is_not_nc(name, tmp_path):
+    with pytest.raises(ParameterError, match=r"must end in \.nc"):
+        run_sweep(SWEEP, tmp_path / name, progress=False)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_system_reason_is_kept_where_it_is_given(tmp_path):
+    error = OSError(errno.EACCES, os.strerror(errno.EACCES))
+    assert chunk_store.write_failure(tmp_path / "x.nc", error, 10) == os.strerror(errno.EACCES)
+
+
+_ = (Path, xr)  # (used by tests below)
