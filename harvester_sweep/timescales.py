@@ -9,7 +9,9 @@ with ``v`` the larger linear-response velocity amplitude at the forcing and at t
 frequency (impacts are strongest near resonance, and the stop makes the response hardening).
 A stop beyond twice the corresponding displacement is taken as out of reach. A stop on a
 spring adds its support's frequency ``sqrt(k_s / m_s)`` and damping rate ``c_s / m_s``, and
-its contact acts on the reduced mass ``m m_s / (m + m_s)`` of tip and stop.
+its contact acts on the reduced mass ``m m_s / (m + m_s)`` of tip and stop. Clear of the
+stop, the fastest mode is the largest |eigenvalue| of the model's linear system: with a
+strong coupling the load stiffens the mode far beyond the natural frequency.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 
 from .contact import contact_damping_of, lower_stop
 from .linear import linear_response
-from .models import hertz
+from .models import hertz, tip_mass
 
 #: |h lambda| that RK4 keeps stable (2.78 on the negative real axis, 2.83 on the imaginary).
 RK4_STABILITY = 2.5
@@ -55,18 +57,23 @@ class TimeScales:
     penetration: float  # estimate [m]
     support: float = 0.0  # a moving stop's support sqrt(k_s/m_s) [rad/s], 0 when rigid
     support_damping: float = 0.0  # ... and c_s/m_s [1/s]
+    # the fastest mode of the stop-free system, coupled: its largest |eigenvalue| [rad/s]
+    coupled: float = 0.0
 
     def fastest(self) -> tuple[float, str]:
         """Largest rate and what it is, for stability."""
-        rates = (self.natural, self.forcing, self.circuit, self.support, self.support_damping,
-                 self.contact, self.contact_damping)
+        rates = (self.natural, self.forcing, self.circuit, self.coupled, self.support,
+                 self.support_damping, self.contact, self.contact_damping)
         rate = max(rates)
         what = rates.index(rate)  # (the first of equals; described only once chosen)
-        if what < 5:
+        if what < 6:
             return rate, ("the natural frequency", "the forcing",
-                          "the load circuit 1/(R C_p)", "the stop's support sqrt(k_s/m_s)",
+                          "the load circuit 1/(R C_p)",
+                          "the coupled electromechanical mode (largest |eigenvalue| of the "
+                          "stop-free system)",
+                          "the stop's support sqrt(k_s/m_s)",
                           "the stop's support damping c_s/m_s")[what]
-        what -= 2
+        what -= 3
         if what == 3:
             return rate, (f"the contact stiffness (linearised contact frequency "
                           f"{self.contact / 2 / math.pi:.3g} Hz at the expected penetration "
@@ -126,7 +133,7 @@ def time_scales(p: dict) -> TimeScales:
         support = math.sqrt(p["stop_support_stiffness"] / p["stop_mass"])
         support_damping = p["stop_support_damping"] / p["stop_mass"]
     return TimeScales(w, wn, 1 / (p["resistance"] * p["capacitance"]), contact, damping, v,
-                      delta, support, support_damping)
+                      delta, support, support_damping, _coupled_rate(*(p[n] for n in _LINEAR[:6])))
 
 
 #: The parameters the stop-free velocity estimate reads.
@@ -146,6 +153,18 @@ def _free_velocity(mass, natural_frequency, damping_ratio, coupling, capacitance
                            capacitance=capacitance, resistance=resistance)
     return max(float(np.max(np.abs(X) * 2 * math.pi * np.array([frequency,
                                                                natural_frequency]))), 1e-12)
+
+
+@functools.lru_cache(maxsize=65536)
+def _coupled_rate(mass, natural_frequency, damping_ratio, coupling, capacitance,
+                  resistance) -> float:
+    """The largest |eigenvalue| [rad/s] of the stop-free linear system (the model's
+    ``linear_system``): with a strong coupling the electrical load stiffens the mode far
+    beyond the natural frequency, which neither the mechanical nor the circuit's rate
+    shows."""
+    m, _ = tip_mass.linear_system(mass, natural_frequency, damping_ratio, coupling,
+                                  capacitance, resistance)
+    return float(np.max(np.abs(np.linalg.eigvals(m))))
 
 
 def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
@@ -177,7 +196,7 @@ def auto_steps_per_period(p: dict) -> int:
     At least 64 steps, rounded up to a multiple of 16.
     """
     s = time_scales(p)
-    oscillation = max(s.forcing, s.natural, s.support, s.contact)
+    oscillation = max(s.forcing, s.natural, s.coupled, s.support, s.contact)
     h_accuracy = (p["accuracy"] / ERROR_CONSTANT) ** 0.25 / oscillation
     h_stable = 0.5 * RK4_STABILITY / s.fastest()[0]
     steps = math.ceil(1.0 / (p["frequency"] * min(h_accuracy, h_stable)))

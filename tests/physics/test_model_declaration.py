@@ -84,3 +84,18 @@ def test_excursion_bound_contains_the_free_motion(preset):
         bound = tip_mass.excursion_bound(e, wn2, thm, thc)
         assert np.abs(run.y[0]).max() <= bound * (1 + 1e-9)
         assert np.abs(run.y[0]).max() >= 0.3 * bound  # a bound, not a blanket
+
+
+@pytest.mark.parametrize("coupling", [0.5, 1.0, 10.0])
+def test_the_step_resolves_the_coupled_mode_of_a_strong_coupling(coupling):
+    """With a strong coupling the load stiffens the mode far beyond the natural frequency
+    (issue 46, item 9: the step was chosen from the parts and the run diverged): the
+    scene settles on the stop-free orbit, the textbook phasor's, to its accuracy."""
+    from harvester_sweep import run_scene
+    result = run_scene("paper", coupling=coupling)
+    p = result.parameters
+    X, V = _textbook(p, p["frequency"])
+    assert result.metrics["status"] == "settled"
+    assert result.metrics["power"] == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]),
+                                                    rel=1e-6)
+    assert result.metrics["x_max"] == pytest.approx(abs(X), rel=1e-6)
