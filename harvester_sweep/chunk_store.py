@@ -34,6 +34,32 @@ class DamagedChunkWarning(UserWarning):
     """A kept chunk failed its check and is computed again."""
 
 
+def lock_output(output) -> FileLock:
+    """The lock of ``output`` (``.OUT.nc.lock`` beside it), acquired: one run at a time per
+    output, whatever the command. Taking it also proves the folder writable before any
+    work. Release it when the output is written (the OS does if the process dies).
+
+    Raises
+    ------
+    ParameterError
+        When another run holds it.
+    StoreError
+        When the folder cannot be written.
+    """
+    output = Path(output)
+    lock = FileLock(output.with_name(f".{output.name}.lock"), timeout=0)
+    try:
+        lock.acquire()
+    except Timeout:
+        raise ParameterError(
+            f"{output}: another run is writing this output now (it holds "
+            f"{lock.lock_file}): wait for it to end, or give another --output") from None
+    except OSError as error:
+        raise StoreError(f"{output}: cannot write in the folder {output.parent} "
+                         f"({error.strerror}): give an --output where you can write") from None
+    return lock
+
+
 class MemoryStore:
     """Chunk results kept in memory (no output file)."""
 
@@ -80,17 +106,7 @@ class ChunkStore:
         self.dir = output.with_name(output.name + ".partial")
         self.spec = spec
         self.digest = spec.digest()
-        self._lock = FileLock(output.with_name(f".{output.name}.lock"), timeout=0)
-        try:
-            self._lock.acquire()
-        except Timeout:
-            raise ParameterError(
-                f"{output}: another run is writing this output now (it holds "
-                f"{self._lock.lock_file}): wait for it to end, or give another --output"
-            ) from None
-        except OSError as error:
-            raise StoreError(f"{output}: cannot write in the folder {output.parent} "
-                             f"({error.strerror}): give an --output where you can write") from None
+        self._lock = lock_output(output)
         try:
             self._check_partial(resume)
         except BaseException:

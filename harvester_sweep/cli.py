@@ -136,6 +136,7 @@ class _Warnings:
 
 
 def _main(args) -> int:
+    _WRITTEN.clear()
     try:
         if args.command == "parameters":
             return _print_parameters()
@@ -151,6 +152,15 @@ def _main(args) -> int:
     except ParameterError as error:
         print(f"harvester-sweep: error: {error}", file=sys.stderr)
         return EXIT_USER_ERROR
+    except KeyboardInterrupt:  # ('run' says what it keeps for --resume itself)
+        done = (f"after writing {', '.join(_WRITTEN)}" if _WRITTEN
+                else "before any file was written")
+        print(f"harvester-sweep: interrupted {done}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+#: The files the command has written so far (said when Ctrl-C stops it).
+_WRITTEN = []
 
 
 def _announce_compilation() -> None:
@@ -212,6 +222,7 @@ def _writing(path: str):
         yield
     except OSError as error:
         raise ParameterError(f"cannot write {path}: {write_failure(path, error)}") from None
+    _WRITTEN.append(path)
 
 
 _FIGURES = (".png", ".pdf", ".svg")
@@ -271,14 +282,41 @@ def _continue(args) -> int:
 
     _check_outputs(args)
     spec = load_continuation(args.spec_file)  # bad input: one line, before anything else
-    _announce_compilation()
+    with _locked(args):
+        _announce_compilation()
+        try:
+            ds = continue_branch(spec)
+        except NoOrbitError as error:
+            print(f"harvester-sweep: error: {error}", file=sys.stderr)
+            return EXIT_DIVERGED
+        print(_bifurcation_table(ds))
+        return _write(ds, args, "plot_branch")
+
+
+@contextlib.contextmanager
+def _locked(args):
+    """The output's lock held, as 'run' holds it: a second run on the same output is
+    refused, and a folder that cannot be written is found before the work, not after."""
+    from .chunk_store import lock_output
+
+    lock = lock_output(args.output)
     try:
-        ds = continue_branch(spec)
-    except NoOrbitError as error:
-        print(f"harvester-sweep: error: {error}", file=sys.stderr)
-        return EXIT_DIVERGED
-    print(_bifurcation_table(ds))
-    return _write(ds, args, "plot_branch")
+        if args.plot is not None:
+            _check_writable(Path(args.plot).parent)
+        yield
+    finally:
+        lock.release()
+
+
+def _check_writable(folder: Path) -> None:
+    import tempfile
+
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder):
+            pass
+    except OSError as error:
+        raise ParameterError(f"cannot write in the folder {folder} ({error.strerror}): give a "
+                             "--plot where you can write") from None
 
 
 def _check_outputs(args) -> None:
@@ -307,11 +345,12 @@ def _basins(args) -> int:
 
     _check_outputs(args)
     spec = load_basins(args.spec_file)  # bad input: one line, before anything else
-    _announce_compilation()
-    start = time.perf_counter()
-    ds = basin_map(spec, progress=not args.quiet)
-    print(_basin_summary(ds, time.perf_counter() - start))
-    return _write(ds, args, "plot_basins")
+    with _locked(args):
+        _announce_compilation()
+        start = time.perf_counter()
+        ds = basin_map(spec, progress=not args.quiet)
+        print(_basin_summary(ds, time.perf_counter() - start))
+        return _write(ds, args, "plot_basins")
 
 
 def _basin_summary(ds, seconds: float) -> str:
@@ -380,10 +419,12 @@ def _plot(args) -> int:
     _check_output(args.output, _FIGURES)
     ds = _open(args.dataset)
     sweeps = [_open(path) for path in args.over]
+    for path, opened in [(args.dataset, ds)] + list(zip(args.over, sweeps)):
+        _check_written_here(path, opened)
     if sweeps and "point" not in ds.dims:
         raise ParameterError("--over: draws sweeps under a branch (a file written by "
                              "'continue')")
-    with ds, _writing(args.output):
+    with ds, _writing(args.output), _complete(args.dataset):
         if "point" in ds.dims:
             plot_branch(ds, args.output, sweeps)
         elif "attractor" in ds.dims:
@@ -393,6 +434,31 @@ def _plot(args) -> int:
     for sweep in sweeps:
         sweep.close()
     return 0
+
+
+def _check_written_here(path: str, ds) -> None:
+    """Refuse a netCDF file this tool did not write: every file it writes has a title
+    "harvester_sweep ..." (datasets.py), and the plots read its variables and attributes
+    by name."""
+    title = ds.attrs.get("title")
+    if not (isinstance(title, str) and title.startswith("harvester_sweep ")):
+        raise ParameterError(f"{path}: not a file written by harvester-sweep (its title "
+                             "attribute is not 'harvester_sweep ...'): plot draws the files "
+                             "of 'run', 'scene', 'continue' and 'basins'")
+
+
+@contextlib.contextmanager
+def _complete(path: str):
+    """A file of this tool that lacks a variable or attribute its plot reads (changed
+    since it was written): one line naming it, exit 2."""
+    try:
+        yield
+    except KeyError as error:
+        what = str(error.args[0]) if error.args else ""
+        what = what.split(". ")[0] if what.startswith("No variable") else \
+            f"no variable, dimension or attribute {what!r}"
+        raise ParameterError(f"{path}: {what}, which harvester-sweep writes and the plot "
+                             "needs (was the file changed since?)") from None
 
 
 def _table(result, preset: str) -> str:

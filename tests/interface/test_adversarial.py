@@ -177,4 +177,143 @@ def test_the_system_reason_is_kept_where_it_is_given(tmp_path):
     assert chunk_store.write_failure(tmp_path / "x.nc", error, 10) == os.strerror(errno.EACCES)
 
 
-_ = (Path, xr)  # (used by tests below)
+# -- 3: 'continue' and 'basins' take the output's lock and check its folder first --------
+
+CONTINUATION = "[continuation]\nstart = 150.0\nstop = 160.0\n"
+BASINS = "[parameters]\nsteps_per_period = 256\n[basins]\nsamples = 2\n"
+
+
+def _not_computed(*args, **kwargs):
+    raise AssertionError("the work began")
+
+
+def _analysis(command, tmp_path, monkeypatch):
+    """The spec file of ``command`` and its driver replaced by one that must not run."""
+    from harvester_sweep import basins, continuation
+
+    monkeypatch.setattr(continuation, "continue_branch", _not_computed)
+    monkeypatch.setattr(basins, "basin_map", _not_computed)
+    toml = tmp_path / f"{command}.toml"
+    toml.write_text(CONTINUATION if command == "continue" else BASINS)
+    return toml
+
+
+@pytest.mark.parametrize("command", ["continue", "basins"])
+def test_a_second_run_on_the_same_output_is_refused_before_the_work(command, tmp_path, capsys,
+                                                                     monkeypatch):
+    from filelock import FileLock
+
+    toml = _analysis(command, tmp_path, monkeypatch)
+    out = tmp_path / "out.nc"
+    with FileLock(tmp_path / ".out.nc.lock", timeout=0):  # as 'run' holds it
+        assert cli.main([command, str(toml), "--output", str(out)]) == 2
+    assert "another run is writing this output" in _one_line(capsys)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["continue", "basins"])
+def test_a_folder_that_cannot_be_written_is_found_before_the_work(command, tmp_path, capsys,
+                                                                   monkeypatch):
+    toml = _analysis(command, tmp_path, monkeypatch)
+    closed = tmp_path / "closed"
+    closed.mkdir()
+    _refuse_writes_in(closed, monkeypatch)
+    rc = cli.main([command, str(toml), "--output", str(closed / "out.nc")])
+    monkeypatch.undo()
+    assert rc == 2 and "cannot write in the folder" in _one_line(capsys)
+    assert list(closed.iterdir()) == []
+
+
+def test_a_plot_folder_that_cannot_be_written_is_found_before_the_work(tmp_path, capsys,
+                                                                        monkeypatch):
+    toml = _analysis("continue", tmp_path, monkeypatch)
+    closed = tmp_path / "closed"
+    closed.mkdir()
+    _refuse_writes_in(closed, monkeypatch)
+    rc = cli.main(["continue", str(toml), "--output", str(tmp_path / "b.nc"), "--plot",
+                   str(closed / "b.png")])
+    monkeypatch.undo()
+    assert rc == 2 and "cannot write in the folder" in _one_line(capsys)
+
+
+def _refuse_writes_in(folder: Path, monkeypatch) -> None:
+    """Creating a file in ``folder`` fails as the OS fails it for a user who may not write
+    there (root writes through permissions, so they are not used)."""
+    def refused(path, *args, _real=os.open, **kwargs):
+        if Path(os.fsdecode(path)).parent == folder:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+        return _real(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", refused)
+
+
+# -- 6: plot on a netCDF file the tool did not write --------------------------------------
+
+@pytest.mark.parametrize("dims", [("x",), ("x", "y"), ("time",), ("point",), ("attractor",),
+                                  ()])
+def test_plot_refuses_a_file_another_tool_wrote_in_one_line(dims, tmp_path, capsys):
+    path = tmp_path / "foreign.nc"
+    xr.Dataset({"a": (dims, np.ones((2,) * len(dims)))}).to_netcdf(path)
+    assert cli.main(["plot", str(path), "--output", str(tmp_path / "p.png")]) == 2
+    line = _one_line(capsys)
+    assert "not a file written by harvester-sweep" in line and "title" in line
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_plot_names_a_variable_removed_from_a_file_of_the_tool(tmp_path, capsys):
+    from harvester_sweep import run_scene
+
+    path = tmp_path / "scene.nc"
+    run_scene("paper", steps_per_period=256).to_netcdf(path)
+    with xr.open_dataset(path) as ds:
+        cut = ds.load().drop_vars("displacement")
+    cut.to_netcdf(tmp_path / "cut.nc")
+    assert cli.main(["plot", str(tmp_path / "cut.nc"), "--output", str(tmp_path / "p.png")]) == 2
+    assert "No variable named 'displacement'" in _one_line(capsys)
+    assert cli.main(["plot", str(path), "--output", str(tmp_path / "p.png")]) == 0
+
+
+# -- 8: Ctrl-C outside a sweep ------------------------------------------------------------
+
+def _interrupt(*args, **kwargs):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("command", ["scene", "continue", "basins"])
+def test_ctrl_c_exits_130_in_one_line(command, tmp_path, capsys, monkeypatch):
+    from harvester_sweep import basins, continuation, scene
+
+    for module, name in ((scene, "run_scene"), (continuation, "continue_branch"),
+                         (basins, "basin_map")):
+        monkeypatch.setattr(module, name, _interrupt)
+    argv = [command] if command == "scene" else [
+        command, str(_spec_file(command, tmp_path)), "--output", str(tmp_path / "out.nc")]
+    try:
+        rc = cli.main(argv)
+    except KeyboardInterrupt:  # (else pytest itself would stop here)
+        pytest.fail("Ctrl-C ended in a KeyboardInterrupt traceback")
+    assert rc == 130
+    assert _one_line(capsys) == "harvester-sweep: interrupted before any file was written"
+    assert not (tmp_path / "out.nc").exists()
+
+
+def test_ctrl_c_after_the_file_says_it_was_written(tmp_path, capsys, monkeypatch):
+    from harvester_sweep import scene
+
+    monkeypatch.setattr(scene.SceneResult, "plot", _interrupt)
+    out = tmp_path / "s.nc"
+    argv = ["scene", "--set", "steps_per_period=256", "--output", str(out), "--plot",
+            str(tmp_path / "s.png")]
+    try:
+        rc = cli.main(argv)
+    except KeyboardInterrupt:
+        pytest.fail("Ctrl-C ended in a KeyboardInterrupt traceback")
+    assert rc == 130 and out.exists()
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == f"harvester-sweep: interrupted after writing {out}"
+
+
+def _spec_file(command: str, tmp_path: Path) -> Path:
+    toml = tmp_path / f"{command}.toml"
+    toml.write_text(CONTINUATION if command == "continue" else BASINS)
+    return toml
