@@ -74,6 +74,13 @@ _RANGE_KEYS = ("start", "stop", "num", "scale")
 #: allocates the axis (num = 1e12 asked for 7 TiB), and each value is checked in Python
 #: (~1 us). At ~1 ms a point, 1e7 points are hours on a machine.
 MAX_AXIS_POINTS = 10**7
+#: Most points of a grid, counted from the axes' lengths before any axis is made (three
+#: axes of 1e7 values are 1e21 points, beyond a 64-bit index): at ~1e4 RK4 steps a point
+#: at the least, more are years of work on any machine.
+MAX_GRID_POINTS = 10**12
+#: Axes longer than this enter the sweep's identity (and the manifest of its partial
+#: result) by their SHA-256, not value by value: a JSON list of 1e7 values took seconds.
+LISTED_AXIS_POINTS = 4096
 
 
 @dataclass(frozen=True)
@@ -194,7 +201,7 @@ class SweepSpec:
                 "kernel_sha256": SOURCE_DIGEST,
                 "preset": self.preset,
                 "parameters": self.base,
-                "grid": {name: values.tolist() for name, values in self.grid.items()},
+                "grid": {name: _identity(values) for name, values in self.grid.items()},
                 "directions": list(self.directions),
                 "metrics": list(self.metrics),
                 "samples": self.samples,
@@ -207,6 +214,16 @@ class SweepSpec:
     def digest(self) -> str:
         """SHA-256 of :meth:`canonical`."""
         return hashlib.sha256(self.canonical().encode()).hexdigest()
+
+
+def _identity(values: np.ndarray):
+    """An axis as it enters the sweep's identity: its values, or for a long one their
+    count, dtype and SHA-256."""
+    if len(values) <= LISTED_AXIS_POINTS:
+        return values.tolist()
+    data = np.ascontiguousarray(values)
+    return {"values": len(data), "dtype": str(data.dtype),
+            "sha256": hashlib.sha256(data.tobytes()).hexdigest()}
 
 
 def load_sweep(source) -> SweepSpec:
@@ -228,6 +245,7 @@ def load_sweep(source) -> SweepSpec:
     check_names(fixed)  # (before the call: `preset` among them would be a TypeError)
     base = resolve_parameters(preset, **fixed)  # bad values, named
     grid, spacing = {}, {}
+    check_grid_size(table(source, "grid"))
     for name, entry in table(source, "grid").items():
         grid[name], spacing[name] = axis(name, entry, fixed)
     if not grid:
@@ -305,6 +323,28 @@ def table(source: dict, key: str) -> dict:
     return value
 
 
+def check_grid_size(grid: dict, per_point: int = 1, what: str = "points") -> None:
+    """Refuse, before any axis is made, a grid of more than MAX_GRID_POINTS points
+    (``per_point`` runs each: a basin map's starts): its size is the product of its axes'
+    lengths, a range's ``num`` or a list's length. An axis of another shape is left to
+    :func:`axis` to refuse."""
+    sizes = []
+    for entry in grid.values():
+        if isinstance(entry, dict):
+            num = entry.get("num")
+            if is_number(num) and isinstance(num, numbers.Integral) and num >= 1:
+                sizes.append(int(num))
+        elif isinstance(entry, (list, tuple, np.ndarray)):
+            sizes.append(len(entry))
+    count = math.prod(sizes) * per_point
+    if count > MAX_GRID_POINTS:
+        raise ParameterError(
+            f"grid: {' x '.join(f'{n:,}' for n in sizes)}"
+            f"{f' x {per_point:,} starts' if per_point > 1 else ''} = {count:.3g} {what}, "
+            f"more than the {MAX_GRID_POINTS:.0e} a run may hold (years of work): make the "
+            "grid coarser")
+
+
 def axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
     """Values [SI] and spacing of one grid axis, each value checked against its range."""
     key = f"grid.{_key(name)}"
@@ -318,7 +358,8 @@ def axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
     if name in fixed:
         raise ParameterError(f"{key}: {name} is also set in [parameters]; give it in one place")
     if isinstance(entry, dict):
-        values, spacing = _range(key, entry).tolist(), entry.get("scale", "linear")
+        values, spacing = _range(key, entry), entry.get("scale", "linear")
+        return _checked_range(parameter, values), spacing
     elif isinstance(entry, (list, tuple, np.ndarray)):
         # (a TOML array as it is: a nested one is refused below, not flattened)
         if isinstance(entry, np.ndarray) and entry.ndim != 1:
@@ -341,6 +382,24 @@ def axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
         except ParameterError as error:
             raise ParameterError(f"grid.{error}") from None
     return np.asarray(checked, dtype=np.int64 if parameter.kind == "int" else np.float64), spacing
+
+
+def _checked_range(parameter, values: np.ndarray) -> np.ndarray:
+    """The values of a range table checked against ``parameter``'s range as a whole: each
+    is checked (Parameter.check, which names the first bad one) only where the array says
+    one may be bad, since an allowed range is an interval (a million values took a second
+    one by one)."""
+    with np.errstate(invalid="ignore"):
+        whole = np.isfinite(values) & (values == np.round(values)
+                                       if parameter.kind == "int" else True)
+    suspects = [int(i) for i in (np.flatnonzero(~whole)[:1].tolist()
+                                 + [np.argmin(values), np.argmax(values)])]
+    for i in sorted(suspects):
+        try:
+            parameter.check(values[i].item())
+        except ParameterError as error:
+            raise ParameterError(f"grid.{error}") from None
+    return values.astype(np.int64) if parameter.kind == "int" else values
 
 
 def _range(key: str, entry: dict) -> np.ndarray:

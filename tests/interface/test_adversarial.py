@@ -317,3 +317,52 @@ def _spec_file(command: str, tmp_path: Path) -> Path:
     toml = tmp_path / f"{command}.toml"
     toml.write_text(CONTINUATION if command == "continue" else BASINS)
     return toml
+
+
+# -- 4: grids too large to count, counted before any axis is made ------------------------
+
+def test_a_grid_beyond_a_64_bit_count_is_refused_before_any_axis_is_made(monkeypatch):
+    from harvester_sweep import sweep_file
+
+    monkeypatch.setattr(sweep_file, "_range", _not_computed)  # (no axis may be made)
+    axis = {"start": 1.0, "stop": 2.0, "num": 10**7}
+    grid = {"frequency": {**axis, "start": 100.0, "stop": 300.0},
+            "gap": {**axis, "start": 1e-6, "stop": 2e-6}, "resistance": axis}
+    with pytest.raises(ParameterError, match=r"grid: 10,000,000 x 10,000,000 x 10,000,000 = "
+                                             r"1e\+21 points, more than the 1e\+12"):
+        load_sweep({"grid": grid})
+
+
+def test_a_grid_of_a_billion_points_is_refused_without_checking_each_value(monkeypatch):
+    from harvester_sweep.parameters import Parameter
+
+    checked = []
+    check = Parameter.check
+    monkeypatch.setattr(Parameter, "check", lambda self, value: checked.append(value)
+                        or check(self, value))
+    grid = {"frequency": {"start": 100.0, "stop": 300.0, "num": 10**7},
+            "gap": {"start": 1e-6, "stop": 2e-6, "num": 100}}
+    with pytest.raises(ParameterError, match="1,000,000,000 points.*yes=True"):
+        run_sweep({"grid": grid}, progress=False)
+    assert len(checked) < 1000  # (one by one, 10,000,100 values were checked)
+
+
+def test_a_value_out_of_range_inside_a_range_table_is_still_named():
+    grid = {"max_periods": {"start": 100, "stop": 101, "num": 3}}  # 100.5: no integer
+    with pytest.raises(ParameterError, match=r"grid.max_periods \[-\] = 100.5"):
+        load_sweep({"grid": grid})
+    grid = {"frequency": {"start": 300.0, "stop": -100.0, "num": 5}}  # 0 and -100: not > 0
+    with pytest.raises(ParameterError, match=r"grid.frequency \[Hz\] = -100.0: must be"):
+        load_sweep({"grid": grid})
+    grid = {"gap": {"start": -1e308, "stop": 1e308, "num": 3}}  # the middle one overflows
+    with pytest.raises(ParameterError, match=r"grid.gap \[m\] = (nan|inf)"):
+        load_sweep({"grid": grid})
+
+
+def test_a_long_axis_enters_the_sweep_identity_by_its_checksum():
+    values = np.linspace(100.0, 300.0, 5000)
+    one = load_sweep(spec({"frequency": values}))
+    other = load_sweep(spec({"frequency": np.where(values == 200.0, 200.0 + 1e-9, values)
+                             if 200.0 in values else values + np.eye(1, 5000, 2500)[0]}))
+    assert one.digest() != other.digest()
+    assert one.digest() == load_sweep(spec({"frequency": list(values)})).digest()
