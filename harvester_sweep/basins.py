@@ -43,7 +43,8 @@ from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
 from .parameters import PRESET_NOTES, ParameterError, is_number, resolve_parameters
 from .results import solve
-from .sweep_file import axis
+from .run_estimate import LONG_RUN_SECONDS, estimate_basins
+from .sweep_file import axis, check_grid_size
 
 #: Two final states belong to one attractor when they differ by less than this, relative to
 #: the largest stroboscopic amplitude of each component over the starts [-]. Orbits are
@@ -96,9 +97,10 @@ class BasinSpec:
         Size of the base shock [m/s], instead of a box.
     base : dict
         The validated parameters of ``preset`` with ``fixed`` (SI units).
-    points : list of dict
-        The validated parameters of every grid point (SI units), the last axis fastest,
-        each checked runnable (not too stiff).
+
+    A grid point's parameters are resolved when asked (:meth:`point`), not held: a map of
+    millions of points held them all (gigabytes) before its size was even said. Each point
+    is checked runnable (not too stiff) by :func:`basin_map` before any integration.
     """
 
     preset: str | None
@@ -110,7 +112,21 @@ class BasinSpec:
     box: dict | None
     shock: float | None
     base: dict
-    points: list
+
+    @property
+    def shape(self) -> tuple:
+        """The grid's shape, one length per axis; () for one point."""
+        return tuple(len(a) for a in self.axes.values())
+
+    @property
+    def n_points(self) -> int:
+        return math.prod(self.shape)
+
+    def point(self, i: int) -> dict:
+        """The validated parameters (SI units) of grid point ``i``, the last axis fastest."""
+        index = np.unravel_index(i, self.shape) if self.axes else ()
+        values = {name: a[j].item() for (name, a), j in zip(self.axes.items(), index)}
+        return resolve_parameters(self.preset, **self.fixed, **values)
 
 
 def check_basins(grid, preset, samples, seed, box, shock, fixed: dict,
@@ -127,20 +143,24 @@ def check_basins(grid, preset, samples, seed, box, shock, fixed: dict,
     if not isinstance(grid, dict):
         raise ParameterError("grid: must be a table of parameter name -> values, e.g. "
                              "{\"frequency\": [240.0, 245.0]}")
+    check_grid_size(grid, samples, "starts")  # (before any axis is made)
     axes, spacing = {}, {}
     for name, entry in grid.items():
         axes[name], spacing[name] = axis(name, entry, fixed)
-    points = [resolve_parameters(preset, **fixed, **dict(zip(axes, values)))
-              for values in itertools.product(*(a.tolist() for a in axes.values()))]
-    for p in points:
-        check_runnable(p)
-    return BasinSpec(preset, dict(fixed), axes, spacing, samples, seed, box, shock, base,
-                     points)
+    spec = BasinSpec(preset, dict(fixed), axes, spacing, samples, seed, box, shock, base)
+    # The checks that couple parameters fail first at the grid's corners (as a sweep's);
+    # every point is checked runnable by basin_map, once its size is said.
+    corners = itertools.product(*({0, len(a) - 1} for a in axes.values()))
+    for corner in corners:
+        check_runnable(spec.point(int(np.ravel_multi_index(corner, spec.shape))
+                                  if axes else 0))
+    return spec
 
 
 def basin_fractions(preset: str | None = DEFAULTS["preset"], samples: int = POINT_SAMPLES,
                     seed: int = DEFAULTS["seed"], box: dict | None = DEFAULTS["box"],
-                    shock: float | None = DEFAULTS["shock"], **parameters) -> xr.Dataset:
+                    shock: float | None = DEFAULTS["shock"], *, yes: bool = False,
+                    **parameters) -> xr.Dataset:
     """The attractors reached from ``samples`` starts at one point, and each one's share.
 
     Parameters
@@ -159,6 +179,9 @@ def basin_fractions(preset: str | None = DEFAULTS["preset"], samples: int = POIN
     shock : float, optional
         Instead of a box: the size of a base shock [m/s] (> 0), a jump of the base's
         velocity at a random moment of the orbit reached from rest (module docstring).
+    yes : bool
+        Start a run estimated beyond run_estimate.LONG_RUN_SECONDS (1 h); without it such
+        a run is refused before any work, as a sweep is.
     **parameters
         Overrides by name in SI units, as :func:`harvester_sweep.run_scene`.
 
@@ -176,16 +199,17 @@ def basin_fractions(preset: str | None = DEFAULTS["preset"], samples: int = POIN
     Raises
     ------
     ParameterError
-        For a parameter, ``samples``, ``seed``, ``box`` or ``shock`` out of range, before
-        any work.
+        For a parameter, ``samples``, ``seed``, ``box`` or ``shock`` out of range, or a
+        run beyond an hour without ``yes``, before any work.
     """
-    return basin_map({}, preset, samples, seed, box, shock, progress=False, **parameters)
+    return basin_map({}, preset, samples, seed, box, shock, progress=False, yes=yes,
+                     **parameters)
 
 
 def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
               samples: int = DEFAULTS["samples"], seed: int = DEFAULTS["seed"],
               box: dict | None = DEFAULTS["box"], shock: float | None = DEFAULTS["shock"], *,
-              progress: bool = True, **parameters) -> xr.Dataset:
+              progress: bool = True, yes: bool = False, **parameters) -> xr.Dataset:
     """:func:`basin_fractions` at every point of a grid, with the same draws at each.
 
     Parameters
@@ -199,7 +223,11 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
         As :func:`basin_fractions`; ``box`` and ``shock`` apply at every point (the default
         box is each point's own).
     progress : bool
-        A progress bar of the starts solved on stderr, when it is a terminal.
+        The map's size and estimated run time on stderr before it starts, and a progress
+        bar of the starts solved there when it is a terminal.
+    yes : bool
+        Start a map estimated beyond run_estimate.LONG_RUN_SECONDS (1 h) (the command
+        line's ``--yes``); without it such a map is refused before any work.
 
     Returns
     -------
@@ -212,8 +240,9 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
     Raises
     ------
     ParameterError
-        As :func:`basin_fractions`, and for a bad grid or a grid point too stiff, before
-        any work.
+        As :func:`basin_fractions`, and for a bad grid, a grid of more than
+        sweep_file.MAX_GRID_POINTS starts, a grid point too stiff or a map beyond an hour
+        without ``yes``, before any work.
     """
     options = dict(preset=preset, samples=samples, seed=seed, box=box, shock=shock)
     if not isinstance(grid, BasinSpec):
@@ -226,9 +255,20 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
         spec = grid
     preset, samples, seed, box, shock = (spec.preset, spec.samples, spec.seed, spec.box,
                                          spec.shock)
-    base, axes, spacing, points = spec.base, spec.axes, spec.spacing, spec.points
-    halves = [_box(p, box) for p in points] if shock is None else None
-    found = _solve(points, samples, seed, halves, shock, progress)
+    base, axes, spacing = spec.base, spec.axes, spec.spacing
+    import numba
+
+    work = estimate_basins(spec, numba.get_num_threads())
+    if work.long and not yes:
+        raise ParameterError(
+            f"{work.describe()}, beyond {LONG_RUN_SECONDS / 3600:g} h: start it with --yes "
+            "(yes=True in Python), or make the grid coarser or the samples fewer")
+    if progress:
+        print(f"harvester-sweep: {work.describe()}", file=sys.stderr, flush=True)
+    for i in range(spec.n_points):  # (bad input fails before any integration)
+        check_runnable(spec.point(i))
+    found = _solve(spec, progress)
+    halves = [_box(spec.point(0), box)] if shock is None and not axes else None
 
     shape = tuple(len(a) for a in axes.values())
     dims = tuple(axes) + ("attractor",)
@@ -312,9 +352,11 @@ def _box(p: dict, box: dict | None) -> np.ndarray:
     return half
 
 
-def _solve(points, samples, seed, halves, shock, progress) -> list:
-    """Every point's attractors (dicts of :func:`_attractors`), ``samples`` starts each."""
-    draws = np.random.default_rng(seed)
+def _solve(spec: BasinSpec, progress) -> list:
+    """Every point's attractors (dicts of :func:`_attractors`), ``spec.samples`` starts
+    each; the points' parameters resolved a call's worth at a time."""
+    samples, shock = spec.samples, spec.shock
+    draws = np.random.default_rng(spec.seed)
     if shock is None:
         unit = draws.uniform(-1.0, 1.0, (samples, 3))
     else:
@@ -322,16 +364,16 @@ def _solve(points, samples, seed, halves, shock, progress) -> list:
         sign = np.where(draws.random(samples) < 0.5, -1.0, 1.0)
     per_call = max(1, CALL_STARTS // samples)
     found = []
-    with tqdm(total=len(points) * samples, unit="start", desc="basins", smoothing=0.1,
+    with tqdm(total=spec.n_points * samples, unit="start", desc="basins", smoothing=0.1,
               disable=not progress or not sys.stderr.isatty()) as bar:
-        for first in range(0, len(points), per_call):
-            chunk = points[first:first + per_call]
+        for first in range(0, spec.n_points, per_call):
+            chunk = [spec.point(i) for i in range(first, min(first + per_call, spec.n_points))]
             one = pack_points(chunk)
             packed = replace(one, **{f.name: np.repeat(getattr(one, f.name), samples, axis=0)
                                      for f in fields(one)})
             if shock is None:
-                packed.states[:, :3] = (unit[None] * np.array(halves[first:first + per_call])
-                                        [:, None]).reshape(-1, 3)
+                halves = np.array([_box(p, spec.box) for p in chunk])
+                packed.states[:, :3] = (unit[None] * halves[:, None]).reshape(-1, 3)
             else:
                 packed.rows[:, PARAM.phase], packed.states[:] = _shocked(one, when, sign,
                                                                          shock)

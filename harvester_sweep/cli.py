@@ -89,7 +89,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="netCDF file to write")
     basins.add_argument("--plot", metavar="FIG.png",
                         help="draw the impact basin fraction over the grid")
-    basins.add_argument("--quiet", action="store_true", help="no progress bar")
+    basins.add_argument("--quiet", action="store_true", help="no estimate and no progress bar")
+    basins.add_argument("--yes", action="store_true",
+                        help="start the map even when it is estimated to take more than an hour")
 
     plot = sub.add_parser("plot", help="draw a sweep, scene, branch or basins netCDF file")
     plot.add_argument("dataset", metavar="OUT.nc",
@@ -348,7 +350,7 @@ def _basins(args) -> int:
     with _locked(args):
         _announce_compilation()
         start = time.perf_counter()
-        ds = basin_map(spec, progress=not args.quiet)
+        ds = basin_map(spec, progress=not args.quiet, yes=args.yes)
         print(_basin_summary(ds, time.perf_counter() - start))
         return _write(ds, args, "plot_basins")
 

@@ -53,12 +53,15 @@ class RunEstimate:
         RK4 steps the remaining points are expected to take.
     threads : int
         Threads that share the work.
+    starts : int
+        Runs from a start of their own at each point (a basin map's samples), 1 for a sweep.
     """
 
     points: int
     remaining: int
     steps: float
     threads: int
+    starts: int = 1
 
     @property
     def seconds(self) -> float:
@@ -73,20 +76,37 @@ class RunEstimate:
     def describe(self) -> str:
         """One line: size, steps and time."""
         todo = "" if self.remaining == self.points else f" ({self.remaining:,} still to run)"
-        return (f"{self.points:,} points{todo}, about {self.steps:.2g} RK4 steps: roughly "
+        starts = f" x {self.starts:,} starts" if self.starts > 1 else ""
+        return (f"{self.points:,} point{'s' if self.points != 1 else ''}{starts}{todo}, "
+                f"about {self.steps:.2g} RK4 steps: roughly "
                 f"{duration(self.seconds)} on {self.threads} thread"
                 f"{'s' if self.threads > 1 else ''}")
 
 
 def estimate(spec, remaining: int, threads: int) -> RunEstimate:
     """The expected work of ``remaining`` points of ``spec`` (a SweepSpec) on ``threads``."""
-    picks = np.unique(np.linspace(0, spec.n_points - 1, min(SAMPLE_POINTS, spec.n_points))
+    per_point = _mean_steps(spec.n_points,
+                            lambda i: spec.point_parameters(spec.values_at(i)))
+    return RunEstimate(spec.n_points, remaining, per_point * remaining, max(1, threads))
+
+
+def estimate_basins(spec, threads: int) -> RunEstimate:
+    """The expected work of a basin map ``spec`` (a basins.BasinSpec) on ``threads``: every
+    start run like a point from rest, and under a shock each point's run from rest too."""
+    runs = spec.samples + (1 if spec.shock is not None else 0)
+    per_point = _mean_steps(spec.n_points, spec.point) * runs
+    return RunEstimate(spec.n_points, spec.n_points, per_point * spec.n_points,
+                       max(1, threads), spec.samples)
+
+
+def _mean_steps(n_points: int, point) -> float:
+    """The mean of point_steps over SAMPLE_POINTS points spread evenly over ``n_points``,
+    ``point(i)`` giving the validated parameters of point ``i``."""
+    picks = np.unique(np.linspace(0, n_points - 1, min(SAMPLE_POINTS, n_points))
                       .round().astype(np.int64))
     with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
         warnings.simplefilter("ignore")
-        per_point = float(np.mean([point_steps(spec.point_parameters(spec.values_at(int(i))))
-                                   for i in picks]))
-    return RunEstimate(spec.n_points, remaining, per_point * remaining, max(1, threads))
+        return float(np.mean([point_steps(point(int(i))) for i in picks]))
 
 
 def point_steps(p: dict) -> float:

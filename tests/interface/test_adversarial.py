@@ -366,3 +366,56 @@ def test_a_long_axis_enters_the_sweep_identity_by_its_checksum():
                              if 200.0 in values else values + np.eye(1, 5000, 2500)[0]}))
     assert one.digest() != other.digest()
     assert one.digest() == load_sweep(spec({"frequency": list(values)})).digest()
+
+
+# -- 5: a basin map says its size and asks for --yes as a sweep does ---------------------
+
+BIG_MAP = ("[grid]\nfrequency = { start = 200, stop = 260, num = 3000 }\n"
+           "gap = { start = 1e-6, stop = 3e-6, num = 3000 }\n[basins]\nsamples = 100\n")
+
+
+def test_a_basin_map_of_days_asks_for_yes_before_resolving_its_points(tmp_path, capsys,
+                                                                       monkeypatch):
+    from harvester_sweep import basins
+
+    resolved = []
+    resolve = basins.resolve_parameters
+
+    def counted(*args, **kwargs):  # (9e6 points resolved one by one took minutes)
+        resolved.append(1)
+        if len(resolved) > 10_000:
+            raise AssertionError("every point of the grid is being resolved")
+        return resolve(*args, **kwargs)
+
+    monkeypatch.setattr(basins, "resolve_parameters", counted)
+    monkeypatch.setattr(basins, "solve", _not_computed)
+    (tmp_path / "big.toml").write_text(BIG_MAP)
+    out = tmp_path / "big.nc"
+    assert cli.main(["basins", str(tmp_path / "big.toml"), "--output", str(out)]) == 2
+    line = _one_line(capsys)
+    assert "9,000,000 points x 100 starts" in line and "--yes" in line, line
+    assert len(resolved) < 1000 and not out.exists()
+
+
+def test_a_basin_map_beyond_an_hour_starts_with_yes_and_says_its_size(tmp_path, capsys,
+                                                                      monkeypatch):
+    from harvester_sweep import basins
+
+    monkeypatch.setattr(basins, "solve", _interrupt)  # (past the gate: stopped there)
+    (tmp_path / "long.toml").write_text(
+        "[parameters]\nsteps_per_period = 1048576\n[grid]\nfrequency = [200.0, 230.0, 260.0]\n"
+        "[basins]\nsamples = 1000000\n")  # (2.5e14 steps: beyond an hour on 128 threads)
+    argv = ["basins", str(tmp_path / "long.toml"), "--output", str(tmp_path / "b.nc")]
+    assert cli.main(argv) == 2
+    assert "--yes" in _one_line(capsys)
+    assert cli.main(argv + ["--yes"]) == 130
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("harvester-sweep: 3 points x 1,000,000 starts, about "), err
+
+
+def test_basin_fractions_python_refuses_a_run_of_hours_without_yes(monkeypatch):
+    from harvester_sweep import basin_fractions, basins
+
+    monkeypatch.setattr(basins, "solve", _not_computed)
+    with pytest.raises(ParameterError, match="yes=True"):
+        basin_fractions(samples=1_000_000, steps_per_period=2**20)

@@ -80,8 +80,8 @@ def test_basins_checks_its_file_once(tmp_path, monkeypatch):
     axes = _counting(monkeypatch, sweep_file.axis, basins, basin_file)
     taken = []
 
-    def stop(points, *args):
-        taken.append(points)
+    def stop(spec, *args):  # (the points solved, as the spec resolves them)
+        taken.append([spec.point(i) for i in range(spec.n_points)])
         raise _Stop
 
     monkeypatch.setattr(basins, "_solve", stop)
