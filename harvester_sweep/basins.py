@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import numbers
 import sys
 from dataclasses import dataclass, fields, replace
 
@@ -314,12 +315,14 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
 
 def check_draws(samples, seed, box, shock):
     """The draw options, checked (ParameterError naming the one out of range)."""
-    if isinstance(samples, bool) or not isinstance(samples, int) \
+    # (numpy's integers are integers: is_number refuses bools, numbers.Integral floats)
+    if not (is_number(samples) and isinstance(samples, numbers.Integral)) \
             or not 1 <= samples <= MAX_SAMPLES:
         raise ParameterError(f"samples [-] = {samples!r}: must be an integer in 1 .. "
                              f"{MAX_SAMPLES:,}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+    if not (is_number(seed) and isinstance(seed, numbers.Integral)) or seed < 0:
         raise ParameterError(f"seed [-] = {seed!r}: must be an integer >= 0")
+    samples, seed = int(samples), int(seed)
     if shock is not None:
         if box is not None:
             raise ParameterError("box and shock: give one, the starts are drawn from a box "

@@ -44,6 +44,7 @@ peak voltage, lam by the range), and the arclength is measured in them.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 import warnings
 from dataclasses import dataclass, field, replace
@@ -56,7 +57,7 @@ from .accuracy import halving_error
 from .linear import linear_response
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
-from .parameters import PARAMETERS, ParameterError, check_names, resolve_parameters
+from .parameters import PARAMETERS, ParameterError, check_names, is_number, resolve_parameters
 from .period_map import PERTURBATION, ROUNDING, orbit_scales, state_size
 from .results import solve
 from .timescales import auto_steps_per_period
@@ -393,14 +394,13 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
                              "from start")
     for name, value, high in (("step", step, 1.0), ("min_step", min_step, 1.0),
                               ("max_step", max_step, 1.0)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not 0 < value <= high:
+        if not is_number(value) or not 0 < value <= high:  # (numpy's numbers too)
             raise ParameterError(f"{prefix}{name} [-] = {value!r}: must be a number in "
                                  f"(0, {high:g}] (relative to |stop - start|)")
     if not min_step <= step <= max_step:
         raise ParameterError(f"{prefix}step [-] = {step!r}: must lie in [min_step, max_step] = "
                              f"[{min_step!r}, {max_step!r}]")
-    if isinstance(max_points, bool) or not isinstance(max_points, int) \
+    if not (is_number(max_points) and isinstance(max_points, numbers.Integral)) \
             or not 2 <= max_points <= 10**6:
         raise ParameterError(f"{prefix}max_points [-] = {max_points!r}: must be an integer in "
                              "[2, 1000000]")
@@ -424,7 +424,7 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
         preset=preset, fixed={k: v for k, v in fixed.items() if k != "steps_per_period"},
         parameter=parameter, start=ends["start"], stop=ends["stop"], steps=int(steps),
         step=float(step), min_step=float(min_step), max_step=float(max_step),
-        max_points=max_points, switch=period_doubling == "switch",
+        max_points=int(max_points), switch=period_doubling == "switch",
         base=at_steps[0])  # (samples[0] is start itself)
 
 

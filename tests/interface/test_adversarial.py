@@ -125,6 +125,47 @@ def test_a_scheduler_that_is_not_text_raises_parameter_error():
         run_sweep(SWEEP, scheduler=8786, progress=False)
 
 
+class _Taken(Exception):
+    """Raised in place of the work: what came before it was accepted."""
+
+
+def test_numpy_scalars_are_numbers_to_continue_branch(monkeypatch):
+    from harvester_sweep import continuation, continue_branch
+
+    taken = []
+    monkeypatch.setattr(continuation, "_continue",
+                        lambda spec: taken.append(spec) or (_ for _ in ()).throw(_Taken))
+    with pytest.raises(_Taken):
+        continue_branch("paper", "frequency", np.float64(150.0), np.float32(160.0),
+                        step=np.float32(0.01), min_step=np.float64(1e-6),
+                        max_step=np.float32(0.05), max_points=np.int64(100))
+    (spec_,) = taken
+    assert spec_.max_points == 100 and type(spec_.max_points) is int
+    assert spec_.step == pytest.approx(0.01) and type(spec_.step) is float
+    with pytest.raises(ParameterError, match=r"max_points \[-\] = .*must be an integer"):
+        continue_branch("paper", "frequency", 150.0, 160.0, max_points=np.float64(100.5))
+
+
+def test_numpy_scalars_are_numbers_to_basin_fractions(monkeypatch):
+    from harvester_sweep import basin_fractions, basins
+
+    taken = []
+    monkeypatch.setattr(basins, "_solve",
+                        lambda spec, *a: taken.append(spec) or (_ for _ in ()).throw(_Taken))
+    with pytest.raises(_Taken):
+        basin_fractions(samples=np.int64(4), seed=np.uint8(3), steps_per_period=256)
+    assert (taken[0].samples, taken[0].seed) == (4, 3)
+    with pytest.raises(ParameterError, match=r"samples \[-\] = .*must be an integer"):
+        basin_fractions(samples=np.float32(4.5))
+
+
+def test_a_basin_grid_given_as_a_list_is_a_parameter_error():
+    from harvester_sweep import basin_map
+
+    with pytest.raises(ParameterError, match="grid: must be a table"):
+        basin_map([("gap", [1e-6])], "paper", samples=4)
+
+
 # -- 12: a full disk at the final write, a 2-D axis, a file name not .nc -----------------
 
 def test_a_full_disk_at_the_final_write_says_so_when_netcdf_does_not(tmp_path, capsys,
