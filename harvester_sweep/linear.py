@@ -39,10 +39,25 @@ def linear_response(amplitude, frequency, **parameters):
     V : complex numpy.ndarray
         Voltage amplitude [V]; the mean power is |V|^2 / (2 R) [W].
     """
-    m, b = tip_mass.linear_system(**parameters)
+    return phasor(*tip_mass.linear_system(**parameters), amplitude, frequency)
+
+
+def phasor(m, b, amplitude, frequency):
+    """The complex amplitudes (X [m], V [V]) of the steady state of the model's linear
+    system ``y' = M y + b a(t)`` (``m`` (..., n, n), ``b`` (n,)) under the base
+    acceleration ``amplitude`` sin(2 pi ``frequency`` t) [m/s^2, Hz]; arrays broadcast."""
     system = 2j * np.pi * np.asarray(frequency, dtype=float)[..., None, None] * _EYE - m
     forcing = np.asarray(amplitude, dtype=float)[..., None, None] * b[:, None]
-    y = np.linalg.solve(system, forcing)[..., 0]  # (stacks broadcast against each other)
+    try:
+        y = np.linalg.solve(system, forcing)[..., 0]  # (stacks broadcast against each other)
+    except np.linalg.LinAlgError:  # undamped and at resonance: unbounded, inf
+        shape = np.broadcast_shapes(system.shape[:-2], forcing.shape[:-2])
+        system = np.broadcast_to(system, shape + system.shape[-2:])
+        forcing = np.broadcast_to(forcing, shape + forcing.shape[-2:])
+        y = np.full(shape + (len(b),), complex(np.inf, np.inf))
+        for i in np.ndindex(shape):
+            if np.linalg.matrix_rank(system[i]) == len(b):
+                y[i] = np.linalg.solve(system[i], forcing[i])[:, 0]
     return y[..., _COMPONENT["x"]], y[..., _COMPONENT["voltage"]]
 
 

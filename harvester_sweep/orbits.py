@@ -70,6 +70,7 @@ from .acceptance import (
     reaches_a_stop,
 )
 from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
+from .models import tip_mass
 from .period_map import (
     PERTURBATION,
     ROUNDING,
@@ -269,14 +270,12 @@ class _Points:
         return head
 
     def _linear_scale(self):
-        """Component scales [m, m/s, V] before any run: the closed-form response without
-        the stop (docs/model.md), floored at the gap."""
+        """Component scales [m, m/s, V] before any run: the response without the stop (the
+        model's linear system's phasor), floored at the gap."""
         r = self.rows
-        w = 2 * np.pi / r[:, PARAM.period]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            load = r[:, PARAM.thm] * r[:, PARAM.thc] / (r[:, PARAM.irc] + 1j * w)
-            x = np.abs(r[:, PARAM.amplitude] / (r[:, PARAM.wn2] - w * w + 1j * w * r[:, PARAM.cm]
-                                                + 1j * w * load))
+        x = tip_mass.free_amplitude(r[:, PARAM.amplitude], 2 * np.pi / r[:, PARAM.period],
+                                    r[:, PARAM.wn2], r[:, PARAM.cm], r[:, PARAM.thm],
+                                    r[:, PARAM.irc], r[:, PARAM.thc])
         x = np.where(np.isfinite(x), x, 0.0)
         gap = np.where(r[:, PARAM.gap] < NO_STOP, np.abs(r[:, PARAM.gap]), 0.0)
         x = np.maximum(x, gap * 1e-3) + 1e-30

@@ -1,8 +1,9 @@
 """A point's period map where its motion stays clear of the stops, in closed form.
 
 There the model is linear and so is its RK4 step (tip_mass.free_step_map): deviations of
-``(x, v, V)`` are carried by the step's matrix ``I + D`` (D's first three columns), and
-over ``N`` steps by its power, taken here by repeated squaring (:func:`free_monodromy`).
+the model's state are carried by the step's matrix ``I + D`` (D's first columns, one for
+each component), and over ``N`` steps by its power, taken here by repeated squaring
+(:func:`free_monodromy`); the sizes are the map's, so the code holds for any state size.
 The orbit solver uses it as the Jacobian of Newton's first run where that run is expected
 to stay clear of the stops, and :func:`free_extent` (the linear motion over one period at
 a coarse step) as that expectation for a motion no run has taken yet.
@@ -22,15 +23,21 @@ from .layouts import PARAM, STATE
 
 @njit(inline="always", **JIT)
 def _product(a, b, out):
-    """out = a @ b for 3 x 3 matrices (out distinct from a and b)."""
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+    """out = a @ b for n x n matrices, n >= 2 (out distinct from a and b), summed in index
+    order. (The first two products in one expression, as a 3 x 3 product written out has
+    them: LLVM fuses one of them into the sum, and these are its bits.)"""
+    n = a.shape[0]
+    for i in range(n):
+        for j in range(n):
+            total = a[i, 0] * b[0, j] + a[i, 1] * b[1, j]
+            for k in range(2, n):
+                total += a[i, k] * b[k, j]
+            out[i, j] = total
 
 
 @njit(**JIT)
 def free_monodromy(rows, steps, periods, out):
-    """Write into ``out`` (n, 3, 3) the monodromy of ``periods[i]`` periods at ``steps[i]``
+    """Write into ``out`` (n, D, D) the monodromy of ``periods[i]`` periods at ``steps[i]``
     steps per period of each packed row ``rows[i]`` (layouts.PARAM), clear of the stops:
     the contact-free RK4 step's matrix to the power ``steps[i] * periods[i]``."""
     for i in range(rows.shape[0]):
@@ -38,8 +45,9 @@ def free_monodromy(rows, steps, periods, out):
         d = free_step_map(r[PARAM.period] / s, math.cos(math.pi / s), math.sin(math.pi / s),
                           r[PARAM.amplitude], r[PARAM.wn2], r[PARAM.cm], r[PARAM.thm],
                           r[PARAM.irc], r[PARAM.thc])
-        step = np.eye(3) + d[:, :3]
-        result, scratch = np.eye(3), np.empty((3, 3))
+        size = d.shape[0]  # the model's state (the map's columns add the forcing phase)
+        step = np.eye(size) + d[:, :size]
+        result, scratch = np.eye(size), np.empty((size, size))
         power = int(s) * int(periods[i])
         while power > 0:
             if power & 1:
@@ -63,14 +71,18 @@ def free_extent(rows, states, steps, out):
                           math.sin(math.pi / steps), r[PARAM.amplitude], r[PARAM.wn2],
                           r[PARAM.cm], r[PARAM.thm], r[PARAM.irc], r[PARAM.thc])
         c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
-        x, v, V = states[i, STATE.x], states[i, STATE.v], states[i, STATE.voltage]
+        size = d.shape[0]  # the model's state, first in layouts.STATE
+        y, dy = states[i, :size].copy(), np.empty(size)
         s, c = math.sin(r[PARAM.phase]), math.cos(r[PARAM.phase])
-        high = low = x
+        high = low = y[STATE.x]
         for _ in range(steps):
-            dx = d[0, 0] * x + d[0, 1] * v + d[0, 2] * V + d[0, 3] * s + d[0, 4] * c
-            dv = d[1, 0] * x + d[1, 1] * v + d[1, 2] * V + d[1, 3] * s + d[1, 4] * c
-            de = d[2, 0] * x + d[2, 1] * v + d[2, 2] * V + d[2, 3] * s + d[2, 4] * c
-            x, v, V = x + dx, v + dv, V + de
+            for row in range(size):  # the map's columns: the state, then sin and cos
+                total = d[row, 0] * y[0] + d[row, 1] * y[1]  # (as _product)
+                for col in range(2, size):
+                    total += d[row, col] * y[col]
+                dy[row] = total + d[row, size] * s + d[row, size + 1] * c
+            for row in range(size):
+                y[row] += dy[row]
             s, c = s * c2 + c * s2, c * c2 - s * s2
-            high, low = max(high, x), min(low, x)
+            high, low = max(high, y[STATE.x]), min(low, y[STATE.x])
         out[i, 0], out[i, 1] = high, low

@@ -24,7 +24,19 @@ from numba.extending import intrinsic
 
 from ..jit import JIT
 from . import lanes
-from .layouts import ACC, GROUP, LANE, LANES, METRIC, N_STROBE, PARAM, SERIES, STATE, STATUS
+from .layouts import (
+    ACC,
+    GROUP,
+    LANE,
+    LANES,
+    METRIC,
+    N_RIGID,
+    N_STROBE,
+    PARAM,
+    SERIES,
+    STATE,
+    STATUS,
+)
 from .monodromy import free_extent, free_monodromy
 from .steady import GAP_HISTORY, MAX_ORBIT_PERIOD
 
@@ -276,7 +288,7 @@ def warm_up() -> None:
     """Compile :func:`run_points` and the closed-form period map (or load them from numba's
     on-disk cache) without running."""
     free_monodromy(np.zeros((0, len(PARAM))), np.zeros(0), np.zeros(0, dtype=np.int64),
-                   np.zeros((0, 3, 3)))
+                   np.zeros((0, N_RIGID, N_RIGID)))
     free_extent(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), 64, np.zeros((0, 2)))
     run_points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros((0, len(METRIC))),
                np.zeros((0, 0, N_STROBE)))

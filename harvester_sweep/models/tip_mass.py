@@ -152,17 +152,38 @@ def linear_system(mass, natural_frequency, damping_ratio, coupling, capacitance,
     base acceleration [m/s^2]: returns M (3 x 3; [1/s], [1/s^2], [N/(V kg)], [V s/m])
     and b (3,) [-]. Parameters in SI units (mass [kg], natural_frequency [Hz],
     damping_ratio [-], coupling [N/V], capacitance [F], resistance [Ohm]); any may be an
-    array (then M is (..., 3, 3), b (3,)). ``**_``: other parameters, ignored."""
+    array (then M is (..., 3, 3)). ``**_``: other parameters, ignored."""
     wn = 2.0 * np.pi * np.asarray(natural_frequency, dtype=float)
-    shape = np.broadcast(wn, mass, damping_ratio, coupling, capacitance, resistance).shape
+    return linear_matrix(wn * wn, 2.0 * np.asarray(damping_ratio) * wn,
+                         np.divide(coupling, mass),
+                         1.0 / (np.asarray(resistance) * capacitance),
+                         np.divide(coupling, capacitance))
+
+
+def linear_matrix(wn2, cm, thm, irc, thc):
+    """:func:`linear_system` from the coefficients as the engine holds them (those of
+    :data:`Coefficients`: wn^2 [1/s^2], c/m [1/s], theta/m [N/(V kg)], 1/(R C_p) [1/s],
+    theta/C_p [V s/m]; arrays broadcast): M (..., 3, 3) and b (3,)."""
+    shape = np.broadcast(wn2, cm, thm, irc, thc).shape
     m = np.zeros(shape + (3, 3))
     m[..., 0, 1] = 1.0
-    m[..., 1, 0] = -wn * wn
-    m[..., 1, 1] = -2.0 * damping_ratio * wn
-    m[..., 1, 2] = np.divide(coupling, mass)
-    m[..., 2, 1] = -np.divide(coupling, capacitance)
-    m[..., 2, 2] = -1.0 / (np.asarray(resistance) * capacitance)
+    m[..., 1, 0] = -np.asarray(wn2)
+    m[..., 1, 1] = -np.asarray(cm)
+    m[..., 1, 2] = thm
+    m[..., 2, 1] = -np.asarray(thc)
+    m[..., 2, 2] = -np.asarray(irc)
     return m, np.array([0.0, 1.0, 0.0])
+
+
+def free_amplitude(A, w, wn2, cm, thm, irc, thc):
+    """|X| [m], the stop-free displacement amplitude under the base acceleration A sin(w t)
+    [m/s^2, rad/s], in closed form from the coefficients as the engine holds them (those of
+    :data:`Coefficients`); arrays broadcast, inf or NaN at an undamped resonance. The
+    phasor of :func:`linear_matrix`, written out: cheap enough for every point's first
+    scales."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        load = thm * thc / (irc + 1j * w)
+        return np.abs(A / (wn2 - w * w + 1j * w * cm + 1j * w * load))
 
 
 def excursion_bound(e, wn2, thm, thc):

@@ -99,3 +99,23 @@ def test_the_step_resolves_the_coupled_mode_of_a_strong_coupling(coupling):
     assert result.metrics["power"] == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]),
                                                     rel=1e-6)
     assert result.metrics["x_max"] == pytest.approx(abs(X), rel=1e-6)
+
+
+def test_phasor_at_an_undamped_resonance_is_unbounded_and_leaves_the_others():
+    from harvester_sweep.linear import phasor
+    wn2 = 100.0
+    m, b = tip_mass.linear_matrix(np.array([wn2, wn2]), np.array([0.0, 1.0]), 0.0, 1.0, 0.0)
+    X, _ = phasor(m, b, 1.0, math.sqrt(wn2) / (2 * math.pi))
+    assert np.isinf(X[0]) and X[1] == pytest.approx(-1j / math.sqrt(wn2), rel=1e-12)
+
+
+@pytest.mark.parametrize("preset", ["paper", "strong_coupling"])
+def test_free_amplitude_in_engine_coefficients_is_the_phasor(preset):
+    from harvester_sweep import packing
+    from harvester_sweep._engine import PARAM
+    p = resolve_parameters(preset)
+    r = packing.pack_parameters(p)
+    f = np.linspace(0.5, 2.0, 7) * p["natural_frequency"]
+    x = tip_mass.free_amplitude(r[PARAM.amplitude], 2 * np.pi * f, r[PARAM.wn2], r[PARAM.cm],
+                                r[PARAM.thm], r[PARAM.irc], r[PARAM.thc])
+    assert np.allclose(x, np.abs(_textbook(p, f)[0]), rtol=1e-12, atol=0)
