@@ -58,7 +58,7 @@ from .linear import linear_response
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
 from .parameters import PARAMETERS, ParameterError, check_names, is_number, resolve_parameters
-from .period_map import PERTURBATION, ROUNDING, orbit_scales, state_size
+from .period_map import CENTRAL, PERTURBATION, ROUNDING, orbit_scales, state_size
 from .results import solve
 from .timescales import auto_steps_per_period
 
@@ -73,6 +73,11 @@ LOCATE = 1e-8
 #: A bifurcation located again within this distance of one already on the branch
 #: (scaled components) means the branch has come round a loop [-].
 REVISIT = 1e-6
+#: A corrected point whose scaled M - I has no entry above this is refused [-]: the period
+#: map is the identity to rounding there (a forcing period far shorter than every time
+#: scale, 1e18 Hz for the paper's scene: M - I read 2e-10, the noise of rounding over the
+#: monodromy's copies at period_map.CENTRAL), and any state passes for its orbit.
+UNRESOLVED = 100 * np.finfo(float).eps / CENTRAL
 #: Packed rows kept for parameter values already visited [-].
 ROW_CACHE = 4096
 #: Corrections the location of one bifurcation may take [-].
@@ -500,25 +505,40 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
     phases = problem.phases(head.z, head.period, head.state)  # the head's orbit, p phases
     phases = np.concatenate([phases / problem.scale,
                              np.full((head.period, 1), head.z[problem.D])], axis=1)
+    unresolved = None  # the parameter where the last step found the map the identity
     while len(points) < budget:
         predicted = a.z + ds * a.tangent
         b = problem.correct(predicted, a.tangent, a.period, a.state)
+        if b is not None and np.max(np.abs(b.jacobian[:, :problem.D])) < UNRESOLVED:
+            unresolved, b = problem.lam(b.z), None  # (any state is its "orbit" there)
+        elif b is not None:
+            unresolved = None
         if b is not None:
             b.tangent = problem.tangent(b.jacobian, a.tangent)
             b.branch = a.branch
             turn = math.acos(min(1.0, float(a.tangent @ b.tangent)))
         if b is None or turn > MAX_TURN:
             ds *= 0.5
+            if ds < min_step and unresolved is not None:
+                return points, (f"stopped at {problem.parameter} = {problem.lam(a.z):.9g}: "
+                                f"at {unresolved:.3g} and beyond the period map is the "
+                                "identity to rounding, and no orbit can be resolved; give a "
+                                "nearer stop")
             if ds < min_step:
                 return points, (f"stalled at {problem.parameter} = {problem.lam(a.z):.9g}: "
                                 f"no correction within min_step = {min_step:g}")
             continue
-        located = []
+        located, shorter = [], False
         tests_a, tests_b = problem.tests(a), problem.tests(b)
         for k, kind in enumerate(TESTED):
             if tests_a[k] * tests_b[k] < 0:
                 found = _locate(problem, a, b, ds, lambda pt, k=k: problem.tests(pt)[k],
                                 tests_a[k], tests_b[k])
+                if found is None and kind == "grazing" and 0.5 * ds >= min_step:
+                    # (flagged at the step's end, a grazing could be far from the stop: a
+                    # shorter step brackets it nearer)
+                    shorter = True
+                    break
                 if found is None:  # (a correction inside failed: flagged at the step's
                     # end, the whole step its bracket, rather than lost)
                     found = ds, replace(b, precision=problem.range * ds)
@@ -526,6 +546,9 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
                 point.bifurcation = list(BIFURCATIONS).index(kind)
                 point.arclength = a.arclength + s
                 located.append((s, point))
+        if shorter:
+            ds *= 0.5
+            continue
         lam = problem.lam(b.z)
         beyond = lam < problem.lo or lam > problem.hi
         if beyond:  # the branch's end: the point where it leaves the range

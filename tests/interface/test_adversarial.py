@@ -460,3 +460,20 @@ def test_basin_fractions_python_refuses_a_run_of_hours_without_yes(monkeypatch):
     monkeypatch.setattr(basins, "solve", _not_computed)
     with pytest.raises(ParameterError, match="yes=True"):
         basin_fractions(samples=1_000_000, steps_per_period=2**20)
+
+
+# -- 10: a continuation to an absurd stop --------------------------------------------------
+
+def test_a_branch_stops_where_the_period_map_is_the_identity_and_flags_no_far_grazing():
+    from harvester_sweep import continue_branch
+
+    # At 1e18 Hz a forcing period is 1e-18 s: nothing moves within it, the period map is
+    # the identity to rounding and any state passes for an orbit.
+    ds = continue_branch("paper", "frequency", 150.0, 1e20)
+    assert "identity to rounding" in ds.attrs["ends"], ds.attrs["ends"]
+    # the paper's fastest time scale is far above a microsecond: 1e12 Hz is beyond it
+    assert float(ds["frequency"].max()) < 1e12
+    gap = float(ds.attrs["gap"])  # (1e-6 m: the paper's Table 1)
+    grazing = list(ds["bifurcation"].attrs["flag_meanings"].split()).index("grazing")
+    for i in np.flatnonzero(ds["bifurcation"].values == grazing):
+        assert abs(float(ds["x_max"][i]) - gap) < 1e-3 * gap, float(ds["x_max"][i])
