@@ -34,7 +34,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
 
-    scene = sub.add_parser("scene", help="run one parameter point to steady state")
+    scene = sub.add_parser(
+        "scene", help="run one parameter point to steady state",
+        description="Run one parameter point (a preset with --set overrides, SI units) from "
+        "rest to its steady state, the periodic orbit it settles on, and print its metrics "
+        "(power, voltages, x_max, contact force, Floquet multipliers, error estimate) as a "
+        "table or JSON; optionally write the orbit to netCDF and draw the paper's Fig. 3.")
     scene.add_argument("--preset", default="paper", choices=sorted(PRESETS),
                        help="starting parameter set (default: paper, the paper's Table 1)")
     scene.add_argument("--set", dest="assignments", action="append", default=[],
@@ -48,7 +53,10 @@ def _parser() -> argparse.ArgumentParser:
     scene.add_argument("--output", metavar="FILE.nc",
                        help="write the last orbit periods and the metrics to netCDF")
 
-    sub.add_parser("parameters", help="list the parameters, their units, ranges and presets")
+    sub.add_parser("parameters", help="list the parameters, their units, ranges and presets",
+                   description="Print every parameter with its SI unit, allowed range and "
+                   "meaning, then each preset's value of every parameter (the names --set, "
+                   "sweep files and output files use).")
 
     run = sub.add_parser("run", help="run a sweep file (TOML) into a netCDF dataset",
                          description="Run every point of a sweep file to steady state and write "
@@ -101,6 +109,11 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--over", metavar="SWEEP.nc", action="append", default=[],
                       help="with a branch: a sweep along the same parameter to draw under it "
                       "(its up and down directions; repeatable)")
+    plot.add_argument("--log", metavar="AXIS", action="append", default=[],
+                      help="draw this grid axis or continued parameter on a log axis "
+                      "(default: where it is spaced log or spans two decades; repeatable)")
+    plot.add_argument("--linear", metavar="AXIS", action="append", default=[],
+                      help="draw this grid axis or continued parameter on a linear axis")
     return parser
 
 
@@ -246,6 +259,7 @@ def _run(args) -> int:
 
     _check_output(args.output, (".nc",))
     spec = load_sweep(args.sweep_file)  # bad input: one line, before anything else
+    _note_derived_stiffness(spec.preset, spec.fixed, spec.grid)
     if not args.quiet:
         _announce_compilation()
     try:  # (the checked spec, not the file: run_sweep takes it as it is)
@@ -284,6 +298,7 @@ def _continue(args) -> int:
 
     _check_outputs(args)
     spec = load_continuation(args.spec_file)  # bad input: one line, before anything else
+    _note_derived_stiffness(spec.preset, spec.fixed, [spec.parameter])
     with _locked(args):
         _announce_compilation()
         try:
@@ -347,6 +362,7 @@ def _basins(args) -> int:
 
     _check_outputs(args)
     spec = load_basins(args.spec_file)  # bad input: one line, before anything else
+    _note_derived_stiffness(spec.preset, spec.fixed, spec.axes)
     with _locked(args):
         _announce_compilation()
         start = time.perf_counter()
@@ -368,13 +384,13 @@ def _basin_summary(ds, seconds: float) -> str:
                      "a point")
     else:
         lines.append(f"  {'attractor':>9} {'basin_fraction':>16} {'orbit_period':>12} "
-                     f"{'impacts_per_period':>18} {'power [W]':>10} {'x_max [m]':>10}")
+                     f"{'impacts_per_period':>18} {'power [W]':>10} {'x_max [' + _UM + ']':>10}")
         for k in range(ds.sizes["attractor"]):
             a = ds.isel(attractor=k)
             lines.append(f"  {k + 1:>9} {float(a.basin_fraction):>8.3f} +- "
                          f"{float(a.basin_fraction_error):<5.3f} {int(a.orbit_period):>12} "
                          f"{float(a.impacts_per_period):>18.3g} {float(a.power):>10.4g} "
-                         f"{float(a.x_max):>10.4g}")
+                         f"{float(a.x_max) / 1e-6:>10.4g}")
     lost = float(np.nanmax(ds["fraction_not_settled"].values + ds["fraction_diverged"].values))
     if lost > 0:
         lines.append(f"  up to {lost:.3g} of a point's starts reached no orbit (not settled "
@@ -383,22 +399,36 @@ def _basin_summary(ds, seconds: float) -> str:
 
 
 def _bifurcation_table(ds) -> str:
-    """The located bifurcations of a branch dataset, one line each."""
+    """The bifurcations of a branch dataset, one line each: a located one at its value, one
+    whose location failed as the interval that holds it (its bracket), not as a value it
+    does not have."""
+    from .plots import bifurcation_points
+
     name = ds.attrs["continued_parameter"]
     unit = ds[name].attrs["units"]
-    kinds = ds["bifurcation"].attrs["flag_meanings"].split()
-    lines = [f"branch of {name} from {ds.attrs['start']:g} to {ds.attrs['stop']:g} {unit}: "
+    scale, shown = (1e-6, _UM) if unit == "m" else (1.0, unit)
+    lines = [f"branch of {name} from {ds.attrs['start'] / scale:g} to "
+             f"{ds.attrs['stop'] / scale:g} {shown}: "
              f"{ds.sizes['point']} points in {ds.attrs['run_time']:.3g} s at "
              f"{ds.attrs['steps_per_period']} steps per period; {ds.attrs['ends']}",
-             "",
-             f"  {'bifurcation':<16} {'branch':>6} {name + ' [' + unit + ']':>18} "
-             f"{'bracket':>9} {'2x steps':>9} {'x_max [m]':>11} {'power [W]':>10}"]
-    for i in np.flatnonzero(ds["bifurcation"].values):
-        lines.append(f"  {kinds[int(ds['bifurcation'][i])]:<16} {int(ds['branch'][i]):>6} "
-                     f"{float(ds[name][i]):>18.10g} {float(ds[name + '_precision'][i]):>9.2g} "
-                     f"{float(ds[name + '_shift'][i]):>+9.2g} {float(ds['x_max'][i]):>11.5g} "
-                     f"{float(ds['power'][i]):>10.4g}")
-    if len(lines) == 3:
+             ""]
+    rows = []
+    for b in bifurcation_points(ds):
+        i = b["index"]
+        value = (f"{b['value'] / scale:.10g}" if b["located"] else
+                 f"{b['low'] / scale:.6g} to {b['high'] / scale:.6g}")
+        rows.append((b["kind"] + (" (lower)" if b["stop"] == "lower" else ""), value, i,
+                     "" if b["located"] else "  not located: somewhere in the interval"))
+    value_w = max([len(f"{name} [{shown}]")] + [len(row[1]) for row in rows])
+    lines.append(f"  {'bifurcation':<16} {'branch':>6} {name + ' [' + shown + ']':>{value_w}} "
+                 f"{'bracket':>9} {'2x steps':>9} {'x_max [' + _UM + ']':>11} {'power [W]':>10}")
+    for kind, value, i, note in rows:
+        lines.append(f"  {kind:<16} {int(ds['branch'][i]):>6} {value:>{value_w}} "
+                     f"{float(ds[name + '_precision'][i]) / scale:>9.2g} "
+                     f"{float(ds[name + '_shift'][i]) / scale:>+9.2g} "
+                     f"{float(ds['x_max'][i]) / 1e-6:>11.5g} {float(ds['power'][i]):>10.4g}"
+                     + note)
+    if not rows:
         lines.append("  none located")
     lines.append(f"  (bracket: width of the interval in {name} that holds it; 2x steps: its "
                  "shift when solved again at twice the steps per period)")
@@ -419,6 +449,10 @@ def _plot(args) -> int:
     from .plots import plot_basins, plot_branch, plot_scene, plot_sweep
 
     _check_output(args.output, _FIGURES)
+    both = sorted(set(args.log) & set(args.linear))
+    if both:
+        raise ParameterError(f"--log and --linear both name {', '.join(both)}")
+    scales = {**{name: "log" for name in args.log}, **{name: "linear" for name in args.linear}}
     ds = _open(args.dataset)
     sweeps = [_open(path) for path in args.over]
     for path, opened in [(args.dataset, ds)] + list(zip(args.over, sweeps)):
@@ -428,11 +462,15 @@ def _plot(args) -> int:
                              "'continue')")
     with ds, _writing(args.output), _complete(args.dataset):
         if "point" in ds.dims:
-            plot_branch(ds, args.output, sweeps)
+            plot_branch(ds, args.output, sweeps, scales=scales)
         elif "attractor" in ds.dims:
-            plot_basins(ds, args.output)
+            plot_basins(ds, args.output, scales=scales)
+        elif "time" in ds.dims:
+            if scales:
+                raise ParameterError("--log, --linear: a scene is drawn against time alone")
+            plot_scene(ds, args.output)
         else:
-            (plot_scene if "time" in ds.dims else plot_sweep)(ds, args.output)
+            plot_sweep(ds, args.output, scales=scales)
     for sweep in sweeps:
         sweep.close()
     return 0
@@ -463,20 +501,46 @@ def _complete(path: str):
                              "needs (was the file changed since?)") from None
 
 
+#: The display unit of every length in the tables, as on the figures (JSON and netCDF keep m).
+_UM = "\u00b5m"
+
+
+def _note_derived_stiffness(preset, fixed: dict, varied) -> None:
+    """Say on stderr where stop_mass sets the contact stiffness (a run's file keeps it as
+    hertz_stiffness): to what, or that each point derives its own."""
+    from .plots import derived_stiffness
+
+    if fixed.get("stop_mass") is None and "stop_mass" not in varied:
+        return
+    if set(varied) & {"mass", "tip_material", "stop_mass", "stop_material"}:
+        print("harvester-sweep: note: hertz_stiffness is derived at each point from "
+              "stop_mass, the tip's mass and the materials (Goldsmith)", file=sys.stderr)
+        return
+    text = derived_stiffness(resolve_parameters(preset, **fixed))
+    if text:
+        print(f"harvester-sweep: note: {text}", file=sys.stderr)
+
+
 def _table(result, preset: str) -> str:
     from .outputs import OUTPUTS, SCENE_OUTPUTS
+    from .plots import derived_stiffness, parameters_text
 
     p, m = result.parameters, result.metrics
-    lines = [f"scene '{preset}': f = {p['frequency']:g} Hz, gap = {p['gap']:g} m, "
-             f"R = {p['resistance']:g} Ohm, coupling = {p['coupling']:.3g} N/V"]
+    lines = [f"scene '{preset}': {parameters_text(p, stiffness=False)}, "
+             f"coupling = {p['coupling']:.3g} N/V"]
     lines += [f"  note: {note}" for note in result.notes]
+    derived = derived_stiffness(p)
+    if derived:  # (stop_mass changes the contact stiffness: say so, and to what)
+        lines.append(f"  note: {derived}")
     lines.append("")
-    lines.append(f"  {'metric':<20} {'value':>14}  unit")
+    rows = []
     for name in SCENE_OUTPUTS:
         if name == "status":
             continue
         output = OUTPUTS[name]
         value, unit, long_name = m[name], output.units, output.long_name
+        scale = 1e-6 if unit == "m" else 1.0
+        unit = _UM if unit == "m" else "" if unit == "1" else unit
         if value is None:
             text = "none"
         elif isinstance(value, bool):
@@ -486,23 +550,45 @@ def _table(result, preset: str) -> str:
         elif isinstance(value, list):
             text = " ".join("none" if v is None else f"{v:.4g}" for v in value)
         else:
-            text = f"{value:.6g}"
-        lines.append(f"  {name:<20} {text:>14}  {'' if unit == '1' else unit:<5} {long_name}")
-    lines.append(f"  {'status':<20} {m['status']:>14}")
+            text = f"{value / scale:.6g}"
+        rows.append((name, text, unit, long_name))
+    rows.append(("status", m["status"], "", ""))
+    # columns as wide as their longest entries (the multipliers' lists and long names)
+    name_w, value_w, unit_w = (max(len(row[k]) for row in rows) for k in range(3))
+    lines.append(f"  {'metric':<{name_w}} {'value':>{value_w}}  unit")
+    lines += [f"  {name:<{name_w}} {text:>{value_w}}  {unit:<{unit_w}} {long_name}".rstrip()
+              for name, text, unit, long_name in rows]
     return "\n".join(lines)
 
 
 def _print_parameters() -> int:
-    print(f"{'name':<22} {'unit':<9} {'allowed':<34} description")
-    for spec in PARAMETERS.values():
-        unit = "-" if spec.unit == "1" else spec.unit
-        print(f"{spec.name:<22} {unit:<9} {spec.range_text():<34} {spec.description}")
+    """Two tables, their columns as wide as their longest entries: the parameters (unit,
+    range, meaning), then every preset's value of each, none left out."""
+    specs = list(PARAMETERS.values())
+    rows = [("name", "unit", "allowed", "description")] + [
+        (s.name, "-" if s.unit == "1" else s.unit, s.range_text(), s.description) for s in specs]
+    print(_columns(rows))
     print()
-    for name, values in PRESETS.items():
-        shown = ", ".join(f"{k}={v:g}" for k, v in values.items()
-                          if isinstance(v, float) and k in ("coupling", "gap", "frequency"))
-        print(f"preset {name}: {shown} ...")
+
+    def shown(value) -> str:
+        if value is None:
+            return "unset"
+        if isinstance(value, bool):
+            return str(value).lower()
+        return f"{value:g}" if isinstance(value, float) else str(value)
+
+    rows = [("preset values", "unit", *PRESETS)] + [
+        (s.name, "-" if s.unit == "1" else s.unit,
+         *(shown(values.get(s.name)) for values in PRESETS.values())) for s in specs]
+    print(_columns(rows))
     return 0
+
+
+def _columns(rows: list) -> str:
+    """Rows of text as aligned columns (the last one left ragged)."""
+    widths = [max(len(row[k]) for row in rows) for k in range(len(rows[0]) - 1)]
+    return "\n".join(" ".join(f"{cell:<{w}}" for cell, w in zip(row, widths)) + " " + row[-1]
+                     for row in rows)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,274 @@
+"""The figures as a designer reads them (issue 44): each test draws a small real run (or a
+real branch relabelled) with matplotlib's Agg canvas and reads the figure back: axis
+scales, unit labels, cell edges, marker labels and where the titles and legends lie."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from matplotlib.text import Text
+
+from harvester_sweep import basin_fractions, continue_branch, resolve_parameters, run_scene
+from harvester_sweep.cli import _bifurcation_table
+from harvester_sweep.plots import bifurcation_points, plot_basins, plot_branch, plot_sweep
+from harvester_sweep.sweep import run_sweep
+
+UM = "\u00b5m"
+FAST = {"steps_per_period": 256, "max_periods": 300}
+
+
+@pytest.fixture(scope="module")
+def s_curve():
+    """The paper S-curve's lower half at 1 um, 300 down to 210 Hz: its grazing at
+    218.68 Hz, 0.1 Hz from its lower fold at 218.58 Hz, and its upper fold at 258.10 Hz."""
+    return continue_branch("paper", "frequency", 300.0, 210.0, gap=1e-6, steps_per_period=256)
+
+
+def _drawn(fig):
+    fig.draw_without_rendering()
+    return fig.canvas.get_renderer()
+
+
+def _inside(inner, outer, slack=1.0) -> bool:
+    return (inner.x0 >= outer.x0 - slack and inner.x1 <= outer.x1 + slack
+            and inner.y0 >= outer.y0 - slack and inner.y1 <= outer.y1 + slack)
+
+
+def _labels(ax):
+    return [t for t in ax.texts if t.get_gid() == "bifurcation label"]
+
+
+def _text_box(label, renderer):
+    """A label's text alone, without the line to its point."""
+    return Text.get_window_extent(label, renderer)
+
+
+def _relabelled(ds, name, values, **attrs):
+    """A real branch with its parameter replaced by ``name`` taking ``values`` (the same
+    points, stabilities and flags): a branch of a parameter over decades without running
+    one."""
+    old = ds.attrs["continued_parameter"]
+    out = ds.rename({old: name, f"{old}_precision": f"{name}_precision",
+                     f"{old}_shift": f"{name}_shift"})
+    out[name] = ("point", np.asarray(values, dtype=float), {"units": "Ohm"})
+    out[f"{name}_precision"] = out[f"{name}_precision"] * 0.0  # (every one located)
+    out.attrs.update({"continued_parameter": name, "start": float(values[0]),
+                      "stop": float(values[-1]), old: ds.attrs["start"], **attrs})
+    out.attrs.pop(name, None)
+    return out
+
+
+def test_a_branch_over_decades_is_drawn_on_a_log_axis_unless_the_user_says_linear(s_curve):
+    """A branch from 100 Ohm to 10 MOhm spreads over a log axis (on a linear one most of its
+    points sat at the left edge); the user can still ask for linear; a frequency branch
+    stays linear."""
+    lam = np.geomspace(100.0, 1e7, s_curve.sizes["point"])
+    branch = _relabelled(s_curve, "resistance", lam)
+    axes = plot_branch(branch).axes
+    assert [ax.get_xscale() for ax in axes] == ["log", "log"]
+    assert axes[-1].get_xlabel() == "resistance [Ohm]"
+    linear = plot_branch(branch, scales={"resistance": "linear"}).axes
+    assert [ax.get_xscale() for ax in linear] == ["linear", "linear"]
+    assert plot_branch(s_curve).axes[-1].get_xscale() == "linear"
+    with pytest.raises(ValueError, match="frequency"):
+        plot_branch(branch, scales={"frequency": "log"})
+
+
+def test_lengths_are_in_um_with_no_offset_on_branches_maps_and_lines(s_curve):
+    """The gap as a branch's parameter, a map's axis and the x_max of a line plot: in um,
+    ticks of order one, no "1e-6" multiplier over the axis."""
+    gaps = np.linspace(0.5e-6, 2e-6, s_curve.sizes["point"])
+    branch = _relabelled(s_curve, "gap", gaps)
+    branch["gap"].attrs["units"] = "m"
+    fig = plot_branch(branch)
+    _drawn(fig)
+    top, bottom = fig.axes[0], fig.axes[1]
+    assert bottom.get_xlabel() == f"gap [{UM}]" and top.get_ylabel() == f"x_max [{UM}]"
+    assert bottom.get_xscale() == "linear"
+    assert bottom.xaxis.get_offset_text().get_text() == ""
+    assert 0.4 <= min(bottom.get_xticks()[1:-1]) and max(bottom.get_xticks()) <= 2.5
+
+    ds = run_sweep({"preset": "paper", "parameters": FAST,
+                    "grid": {"gap": [1e-6, 2e-6], "frequency": [200.0, 240.0]},
+                    "sweep": {"outputs": ["power", "x_max"]}}, progress=False)
+    fig = plot_sweep(ds)
+    _drawn(fig)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == f"gap [{UM}]" and ax.yaxis.get_offset_text().get_text() == ""
+    assert ax.get_ylim()[0] == pytest.approx(0.5) and ax.get_ylim()[1] == pytest.approx(2.5)
+    line = plot_sweep(ds.sel(frequency=200.0))
+    _drawn(line)
+    assert line.axes[-1].get_xlabel() == f"gap [{UM}]" and "frequency = 200 Hz" in \
+        line.get_suptitle()
+    assert line.axes[1].get_ylabel() == f"x_max [{UM}]"
+    assert all(a.xaxis.get_offset_text().get_text() == "" for a in line.axes)
+
+
+@pytest.fixture(scope="module")
+def load_map():
+    """README's fr.toml, smaller: four loads from 1 kOhm to 1 MOhm (log) x 3 frequencies."""
+    return run_sweep({"preset": "paper", "parameters": {"gap": 1e-6, **FAST},
+                      "grid": {"frequency": [200.0, 240.0, 280.0],
+                               "resistance": {"start": 1e3, "stop": 1e6, "num": 4,
+                                              "scale": "log"}},
+                      "sweep": {"directions": ["up", "down"], "outputs": ["power"]}},
+                     progress=False)
+
+
+def test_log_map_cells_are_centred_on_their_values_in_log_space(load_map):
+    """Each load's row runs from value / sqrt(10) to value * sqrt(10): the 1 kOhm row as tall
+    as the others on the log axis (it was a thin strip), the frequency columns halfway
+    between their values."""
+    fig = plot_sweep(load_map)
+    for ax in fig.axes[:2]:
+        assert ax.get_yscale() == "log" and ax.get_ylabel() in ("resistance [Ohm]", "")
+        edges = ax.collections[0].get_coordinates()
+        rows = edges[:, 0, 1]
+        np.testing.assert_allclose(np.log10(rows), [2.5, 3.5, 4.5, 5.5, 6.5], rtol=1e-12)
+        np.testing.assert_allclose(edges[0, :, 0], [180.0, 220.0, 260.0, 300.0])
+        assert ax.get_ylim() == pytest.approx((10 ** 2.5, 10 ** 6.5))
+    assert fig.axes[0].get_ylabel() == "resistance [Ohm]"
+    assert plot_sweep(load_map, scales={"resistance": "linear"}).axes[0].get_yscale() == \
+        "linear"
+
+
+def test_every_bifurcation_is_marked_and_labelled_with_its_value_none_hidden(s_curve):
+    """The lower fold (218.58 Hz) and the grazing (218.68 Hz) lie on one spot: each has
+    its label with kind and value, no label overlaps another or leaves the panel, and the
+    star is drawn under the smaller fold dot."""
+    fig = plot_branch(s_curve)
+    renderer = _drawn(fig)
+    top = fig.axes[0]
+    texts = sorted(t.get_text() for t in _labels(top))
+    assert texts == ["fold 218.58 Hz", "fold 258.1 Hz", "grazing 218.68 Hz"], texts
+    boxes = [_text_box(t, renderer) for t in _labels(top)]
+    frame = top.get_window_extent(renderer)
+    assert all(_inside(box, frame) for box in boxes)
+    for a, b in itertools.combinations(boxes, 2):
+        assert not a.overlaps(b), (a, b)
+    markers = {line.get_gid(): line for line in top.get_lines()
+               if (line.get_gid() or "").startswith("bifurcation")}
+    star, dot = markers["bifurcation grazing"], markers["bifurcation fold"]
+    assert star.get_zorder() < dot.get_zorder() and star.get_markersize() > dot.get_markersize()
+
+
+def test_a_failed_location_is_printed_and_drawn_as_its_bracket(s_curve):
+    """A fold whose bracket stayed 7.5 Hz wide: labelled and printed as the interval that
+    holds it, drawn as a bar over that interval, not as a value with ten digits."""
+    ds = s_curve.copy(deep=True)
+    i = [b["index"] for b in bifurcation_points(ds) if b["kind"] == "fold"][0]
+    value = float(ds["frequency"][i])
+    ds["frequency_precision"][i] = 7.5
+    found = [b for b in bifurcation_points(ds) if b["index"] == i][0]
+    assert not found["located"] and found["low"] == pytest.approx(value - 7.5)
+    fig = plot_branch(ds)
+    _drawn(fig)
+    top = fig.axes[0]
+    text = [t.get_text() for t in _labels(top) if "not located" in t.get_text()]
+    assert text == [f"fold, not located: {value - 7.5:.4g} to {value + 7.5:.4g} Hz"]
+    bars = [line for line in top.get_lines() if line.get_gid() == "bracket"]
+    assert len(bars) == 1
+    np.testing.assert_allclose(bars[0].get_xdata(), [value - 7.5, value + 7.5])
+    table = _bifurcation_table(ds)
+    row = [line for line in table.splitlines() if "not located" in line]
+    assert len(row) == 1 and f"{value - 7.5:.6g} to {value + 7.5:.6g}" in row[0]
+    assert f"{value:.10g}" not in table
+
+
+def test_a_lower_stop_grazing_is_drawn_against_x_min_and_the_lower_stop():
+    """A lower stop alone (the upper one 1 m away): its grazing is marked on an x_min panel
+    at the lower stop's line, labelled as the lower stop's, and not on x_max; the upper
+    stop, out of reach, draws no line."""
+    ds = continue_branch("paper", "frequency", 300.0, 215.0, gap=1.0, lower_gap=1e-6,
+                         steps_per_period=256)
+    fig = plot_branch(ds)
+    _drawn(fig)
+    x_max, x_min, power = fig.axes[:3]
+    assert x_min.get_ylabel() == f"x_min [{UM}]" and power.get_ylabel() == "power [W]"
+    stops = [line for line in x_min.get_lines() if line.get_label() == "lower stop"]
+    assert len(stops) == 1 and stops[0].get_ydata()[0] == pytest.approx(-1.0)
+    assert not [line for line in x_max.get_lines() if line.get_label().startswith("stop")]
+    grazing = [line for line in x_min.get_lines() if line.get_gid() == "bifurcation grazing"]
+    assert len(grazing) == 1 and grazing[0].get_ydata()[0] == pytest.approx(-1.0, abs=1e-3)
+    assert not [line for line in x_max.get_lines() if line.get_gid() == "bifurcation grazing"]
+    assert [t.get_text() for t in _labels(x_min)] == ["grazing (lower stop) 218.68 Hz"]
+    assert "grazing (lower)" in _bifurcation_table(ds)
+
+
+def test_titles_print_formatted_values_with_the_lower_and_the_moving_stop(s_curve):
+    """Titles in display units with prefixes (no "1e-06 m", no "10000 Ohm"), with lower_gap,
+    a moving stop's support and a stiffness derived from stop_mass, inside the figure."""
+    branch = s_curve.copy()
+    branch.attrs.update(lower_gap=1.5e-6)
+    fig = plot_branch(branch)
+    renderer = _drawn(fig)
+    title = fig.get_suptitle()
+    assert f"gap = 1 {UM}" in title and f"lower_gap = 1.5 {UM}" in title
+    assert "resistance = 10 kOhm" in title and "e-06" not in title and "10000" not in title
+    assert _inside(fig._suptitle.get_window_extent(renderer), fig.bbox)
+
+    moving = s_curve.copy()
+    moving.attrs.update(stop_mass=2.5e-3, stop_support_stiffness=15791.4,
+                        stop_support_damping=0.628)
+    title = plot_branch(moving).get_suptitle().replace("\n", " ")
+    assert ("moving stop: stop_mass = 2.5 g, stop_support_stiffness = 15.8 kN/m, "
+            "stop_support_damping = 0.628 N s/m") in title
+
+    scene = run_scene("paper", stop_mass=1e-2, lower_gap=1.5e-6, frequency=245.0, **FAST)
+    fig = scene.plot()
+    renderer = _drawn(fig)
+    title = fig.get_suptitle().replace("\n", " ")
+    k_h = resolve_parameters("paper", stop_mass=1e-2)["hertz_stiffness"]
+    assert f"hertz_stiffness = {k_h:.3g} N/m^1.5 (derived from stop_mass = 10 g" in title
+    assert f"lower_gap = 1.5 {UM}" in title and "frequency = 245 Hz" in title
+    assert _inside(fig._suptitle.get_window_extent(renderer), fig.bbox)
+
+
+def test_the_scene_legend_leaves_the_orbit_uncovered():
+    """The displacement panel's legend (stop, lower stop) covers no point of the orbit."""
+    fig = run_scene("paper", lower_gap=1.5e-6, frequency=245.0, **FAST).plot()
+    renderer = _drawn(fig)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == f"displacement [{UM}]"
+    legend = ax.get_legend().get_window_extent(renderer)
+    orbit = ax.get_lines()[0]
+    points = orbit.get_transform().transform(orbit.get_xydata())
+    covered = ((points[:, 0] >= legend.x0) & (points[:, 0] <= legend.x1)
+               & (points[:, 1] >= legend.y0) & (points[:, 1] <= legend.y1))
+    assert not covered.any()
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        f"stop (gap 1 {UM})", f"lower stop (lower_gap 1.5 {UM})"]
+    assert _inside(legend, fig.bbox)
+
+
+def test_the_basin_bar_chart_titles_fit_the_figure():
+    """At one point: the figure's title and the panel's are inside the figure (the title
+    was cut at both ends)."""
+    ds = basin_fractions("paper", samples=8, shock=0.01, gap=1.32e-6, frequency=245.2,
+                         steps_per_period=256)
+    fig = plot_basins(ds)
+    renderer = _drawn(fig)
+    assert "gap = 1.32 \u00b5m" in fig.get_suptitle()
+    assert "resistance = 10 kOhm" in fig.get_suptitle()  # (wrapped between items only)
+    assert _inside(fig._suptitle.get_window_extent(renderer), fig.bbox)
+    assert _inside(fig.axes[0].title.get_window_extent(renderer), fig.bbox)
+    assert _inside(fig.axes[0]._left_title.get_window_extent(renderer), fig.bbox)
+
+
+def test_down_dots_lie_under_the_up_dots_of_a_bifurcation_diagram():
+    """Where the directions agree both show: down as open rings under smaller filled up
+    dots."""
+    ds = run_sweep({"preset": "paper", "parameters": FAST,
+                    "grid": {"frequency": [200.0, 240.0]},
+                    "sweep": {"directions": ["up", "down"], "outputs": ["power", "strobe"],
+                              "samples": 2}}, progress=False)
+    fig = plot_sweep(ds)
+    ax = fig.axes[-1]
+    assert ax.get_ylabel() == "voltage y(nT) [\u00b5V]"
+    dots = {line.get_gid(): line for line in ax.get_lines() if line.get_gid()}
+    up, down = dots["strobe up"], dots["strobe down"]
+    assert up.get_zorder() > down.get_zorder()
+    assert up.get_markersize() < down.get_markersize() and down.get_markerfacecolor() == "none"
+    assert fig.axes[-2].get_ylabel() == f"displacement y(nT) [{UM}]"
