@@ -88,7 +88,7 @@ from .period_map import (
 CHORD = PERTURBATION
 #: A Newton step below this (relative to the scales) likely brings the iterate within the
 #: floor of the orbit: the next iterate's copies run both ways, so that the monodromy by
-#: central differences the orbit is judged on (see _after_newton) needs no run of its
+#: central differences the orbit is judged on (see _newton) needs no run of its
 #: own [-].
 LAST_STEP = 1e-3
 #: Newton iterations of one attempt before it is given up [-].
@@ -123,7 +123,11 @@ LOCATED = 0.05
 ESTIMATE_RUNS = 4
 SAMPLES = MAX_ORBIT_PERIOD + 1  # stroboscopic samples read back from each run
 
-# what a point is doing (the phase of :class:`_Points`)
+# A point's phase: what its next run is (:class:`_Points`). A phase that runs has one
+# function that takes its points' runs and returns each point's next phase (_newton,
+# _transient, _estimate; _converged and _give_up return theirs for the points they are
+# handed); a point is set up for a phase's run where that next phase is chosen (_attempt,
+# _chunk, _start_estimate, _refine), and _enter moves the points on.
 _WAITING, _NEWTON, _TRANSIENT, _ESTIMATE, _DONE = range(5)
 
 
@@ -205,7 +209,8 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
 
 class _Points:
     """The points of one solve, each a small state machine (its phase) advanced one round
-    of engine runs at a time; all arrays are indexed by point."""
+    of engine runs at a time; all arrays are indexed by point. A point's result depends on
+    its own numbers only: every transition acts on each point apart."""
 
     def __init__(self, rows, states, successors, estimated, accuracy, max_steps):
         n = len(rows)
@@ -285,20 +290,19 @@ class _Points:
         return orbit_scales(self.rows[index], x, v_peak, self.D)
 
     def start(self, idx):
-        """Points ``idx`` start: refused ones are done at once (their state passes on)."""
-        refused = idx[self.rows[idx, PARAM.max_periods] == 0]
-        if refused.size:
-            self.metrics[refused, :METRIC.orbit_period] = np.nan
-            self.status[refused] = STATUS.too_stiff
-            self.finals[refused] = self.begin[refused]
-            self._finish(refused)
-        idx = idx[self.rows[idx, PARAM.max_periods] > 0]
-        self.traj[idx] = self.begin[idx]
-        self._attempt(idx)
+        """Points ``idx`` start: refused ones are done at once (their state passes on), the
+        others make a Newton attempt from their initial state."""
+        runs = self.rows[idx, PARAM.max_periods] > 0
+        refused, going = idx[~runs], idx[runs]
+        self.metrics[refused, :METRIC.orbit_period] = np.nan
+        self.status[refused] = STATUS.too_stiff
+        self.finals[refused] = self.begin[refused]
+        self.traj[going] = self.begin[going]
+        self._attempt(going)
+        self._enter(idx, np.where(runs, _NEWTON, _DONE))
 
     def _attempt(self, idx):
-        """A Newton attempt from the trajectory's state."""
-        self.phase[idx] = _NEWTON
+        """Set up a Newton attempt from the trajectory's state (phase _NEWTON)."""
         self.y[idx] = self.traj[idx]
         self.t0[idx] = self.traj[idx, :self.D]
         self.iteration[idx] = 0
@@ -360,12 +364,19 @@ class _Points:
         runs = [(ev.metrics, ev.ends, ev.strobes, ev.jacobian, ev.ok) for ev in copies]
         runs.append((chords.metrics, chords.ends, chords.strobes,
                      self.newton_jacobian[chord], chords.ok))
-        self._after_newton(np.concatenate([b for b, _ in blocks] + [chord]),
-                           *(np.concatenate(parts) for parts in zip(*runs)))
-        self._after_transient(transient, transients.metrics, transients.ends,
-                              transients.strobes)
-        self._after_estimate(estimate, estimates.metrics, estimates.ends, estimates.ok)
+        newton = np.concatenate([b for b, _ in blocks] + [chord])
+        after = [self._newton(newton, *(np.concatenate(parts) for parts in zip(*runs))),
+                 self._transient(transient, transients.metrics, transients.ends,
+                                 transients.strobes),
+                 self._estimate(estimate, estimates.metrics, estimates.ends, estimates.ok)]
+        self._enter(np.concatenate([newton, transient, estimate]), np.concatenate(after))
         return int((self.phase == _DONE).sum()) - before
+
+    def _enter(self, idx, phases):
+        """Points ``idx`` go on to ``phases``; a point done, or taken on its orbit, lets its
+        successor start (once)."""
+        self.phase[idx] = phases
+        self._release(idx[(phases == _DONE) | (self.status[idx] == STATUS.settled)])
 
     def _copies(self, idx, ev, kind):
         """Whether the runs of points ``idx`` with their copies of ``kind`` (an
@@ -389,48 +400,24 @@ class _Points:
             | (r[:, PARAM.khm] > 0) & (m[:, METRIC.impacts_per_period] > 0) \
             | (r[:, PARAM.lower_khm] > 0) & (m[:, METRIC.impacts_per_period_lower] > 0)
 
-    def _after_newton(self, idx, m, centre, strobes, jac, lanes_ok):
-        """A Newton iterate's run: metrics ``m``, end state ``centre`` and strobes of its
-        centre lane, the monodromy ``jac`` (of its copies, or reused by a chord step) and
-        whether every lane ran sane and finite."""
+    def _newton(self, idx, m, centre, strobes, jac, lanes_ok):
+        """The phase _NEWTON: a Newton iterate's run, metrics ``m``, end state ``centre``
+        and strobes of its centre lane, the monodromy ``jac`` (of its copies, or reused by
+        a chord step) and whether every lane ran sane and finite. Returns each point's next
+        phase: _NEWTON for a next iterate (or the same one again, with copies), and those
+        of a fixed point (_converged) or of an attempt given up (_give_up)."""
+        phases = np.full(len(idx), _NEWTON)
         if not idx.size:
-            return
+            return phases
         trajectory = (self.iteration[idx] == 0) & (self.refine[idx] == 0)
-        # the attempt's first run is the trajectory's next p periods
-        first = idx[trajectory]
-        self.touched[first] = self._touched(first, m[trajectory])
-        self.t1[first] = centre[trajectory, :self.D]
-        self.t1_periods[first] = self.p[first]
-        self.traj[first] = centre[trajectory]
-        self.run[first] += self.p[first]
-        tested = first[self.tested[first]]  # (keep the orbit the test found)
-        self.metrics[first] = np.where(self.tested[first, None], self.metrics[first],
-                                       m[trajectory])
-        self.strobes[first] = np.where(self.tested[first, None, None], self.strobes[first],
-                                       strobes[trajectory])
-        self.traj[tested] = self.y[tested]
+        self._trajectory_ran(idx[trajectory], m[trajectory], centre[trajectory],
+                             strobes[trajectory])
         diverged = trajectory & ~sane(m)
-        if diverged.any():
-            self._diverge(idx[diverged])
+        self._diverge(idx[diverged])
+        phases[diverged] = _DONE
         ok = ~diverged & lanes_ok
         y = self.y[idx, :self.D]
-        xs = np.maximum(np.abs(m[:, METRIC.x_max]), np.abs(m[:, METRIC.x_min]))
-        scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, METRIC.v_peak], 1.0),
-                             idx)
-        scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
-        residual = centre[:, :self.D] - y
-        step = np.zeros_like(residual)
-        cond = np.full(len(idx), np.inf)
-        a = np.eye(self.D) - np.where(ok[:, None, None], jac, 0.0)
-        scaled = a / scale[:, :, None] * scale[:, None, :]  # (I - M) in scaled components
-        good = ok & (np.abs(np.linalg.det(scaled)) > 1e-12)
-        if good.any():
-            inverse = np.linalg.inv(scaled[good])
-            step[good] = scale[good] * np.einsum("nij,nj->ni", inverse,
-                                                 residual[good] / scale[good])
-            cond[good] = np.linalg.norm(inverse, ord=np.inf, axis=(1, 2))
-        size = np.where(good, norm(step, scale), np.inf)
-        floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
+        scale, step, size, good, floor = self._newton_step(idx, m, centre, jac, ok)
         converged = good & (size <= floor)
         # an orbit with contact is not taken from beyond NEAR of it: not when the first
         # step is beyond NEAR (the step is about the distance from the orbit), nor when the
@@ -518,16 +505,60 @@ class _Points:
         # (an iterate this near is likely the orbit: its copies run both ways at once)
         self.central[g] = ~self.chord[g] & (size[going] <= LAST_STEP)
         # converged: a fixed point; taken or not
-        c = idx[converged]
-        if c.size:
-            self._converged(c, m[converged], centre[converged], strobes[converged],
-                            jac[converged], scale[converged], floor[converged])
+        if converged.any():
+            phases[converged] = self._converged(
+                idx[converged], m[converged], centre[converged], strobes[converged],
+                jac[converged], scale[converged], floor[converged])
         # failed: integrate on (a re-solve keeps the orbit it had)
-        fails = idx[failed]
         self.hint[idx[failed & ~far]] = 0
-        self._give_up(fails)
+        phases[failed] = self._give_up(idx[failed])
+        return phases
+
+    def _trajectory_ran(self, idx, m, centre, strobes):
+        """The first run of an attempt of points ``idx`` is their trajectory's next p
+        periods (metrics ``m``, end states ``centre``, ``strobes``): the trajectory moves on
+        (an orbit the engine's steady-state test found is kept)."""
+        self.touched[idx] = self._touched(idx, m)
+        self.t1[idx] = centre[:, :self.D]
+        self.t1_periods[idx] = self.p[idx]
+        self.traj[idx] = centre
+        self.run[idx] += self.p[idx]
+        tested = idx[self.tested[idx]]
+        self.metrics[idx] = np.where(self.tested[idx, None], self.metrics[idx], m)
+        self.strobes[idx] = np.where(self.tested[idx, None, None], self.strobes[idx], strobes)
+        self.traj[tested] = self.y[tested]
+
+    def _newton_step(self, idx, m, centre, jac, ok):
+        """Newton's step from the iterates of points ``idx`` to the fixed point of the map
+        that ran them to ``centre`` with monodromy ``jac`` (where ``ok``): the component
+        scales of the run (its own where ok, else the last), the step, its size relative
+        to the scales (inf where I - M is singular), whether it was taken (``good``), and
+        Newton's floor (the settle tolerance, or rounding times the conditioning of
+        I - M)."""
+        xs = np.maximum(np.abs(m[:, METRIC.x_max]), np.abs(m[:, METRIC.x_min]))
+        scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, METRIC.v_peak], 1.0),
+                             idx)
+        scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
+        residual = centre[:, :self.D] - self.y[idx, :self.D]
+        step = np.zeros_like(residual)
+        cond = np.full(len(idx), np.inf)
+        a = np.eye(self.D) - np.where(ok[:, None, None], jac, 0.0)
+        scaled = a / scale[:, :, None] * scale[:, None, :]  # (I - M) in scaled components
+        good = ok & (np.abs(np.linalg.det(scaled)) > 1e-12)
+        if good.any():
+            inverse = np.linalg.inv(scaled[good])
+            step[good] = scale[good] * np.einsum("nij,nj->ni", inverse,
+                                                 residual[good] / scale[good])
+            cond[good] = np.linalg.norm(inverse, ord=np.inf, axis=(1, 2))
+        size = np.where(good, norm(step, scale), np.inf)
+        floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
+        return scale, step, size, good, floor
 
     def _converged(self, idx, m, centre, strobes, jac, scale, floor):
+        """Points ``idx`` whose Newton iterates converged to a fixed point: solved again at a
+        shorter period that closes the orbit too (_NEWTON), taken (_ESTIMATE, or _DONE
+        without an error estimate), or not taken (_give_up). Returns their next phases."""
+        phases = np.full(len(idx), _NEWTON)
         p = self.p[idx]
         y = self.y[idx, :self.D]
         # a shorter period that also closes the orbit: solve again at it
@@ -546,7 +577,8 @@ class _Points:
         idx, m, centre, strobes, jac, scale, floor, y = (
             a[keep] for a in (idx, m, centre, strobes, jac, scale, floor, y))
         if not idx.size:
-            return
+            return phases
+        kept = np.zeros(len(idx), phases.dtype)
         p = self.p[idx]
         mult = np.linalg.eigvals(jac)
         radius = np.max(np.abs(mult), axis=1)
@@ -582,11 +614,9 @@ class _Points:
         self.jacobian[t] = jac[taken]
         self.orbit_steps[t] = self.steps[t]
         self.floor[t] = floor[taken]
-        self.status[t] = STATUS.settled
-        self._release(t)  # (the successor need not wait for the error estimate)
-        est = t[self.estimated[t]]
-        self._estimate(est)
-        self._finish(t[~self.estimated[t]])
+        self.status[t] = STATUS.settled  # (its successor starts: need not wait for estimates)
+        self._start_estimate(t[self.estimated[t]])
+        kept[taken] = np.where(self.estimated[t], _ESTIMATE, _DONE)
         # not taken: integrate on for about the periods the motion needs to come near
         d0 = norm(e, scale)
         with np.errstate(divide="ignore"):  # (d0 = 0: no hint, below)
@@ -594,36 +624,35 @@ class _Points:
                            / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
         self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > near[~taken]), hint, 0)
         self.refused[idx[~taken]] = np.where(stable[~taken] & w[~taken], p[~taken], 0)
-        self._give_up(idx[~taken])
+        kept[~taken] = self._give_up(idx[~taken])
+        phases[keep] = kept
+        return phases
 
     def _give_up(self, idx):
-        """An attempt that did not give an orbit to take: integrate the trajectory on (a
-        re-solve at a finer step keeps the orbit and estimate it had; an orbit found by
-        the engine's steady-state test stands, with the monodromy of the attempt's first
-        run, at its state)."""
+        """An attempt that did not give an orbit to take: integrate the trajectory on
+        (_TRANSIENT), or _DONE: a re-solve at a finer step keeps the orbit and estimate it
+        had; an orbit found by the engine's steady-state test stands, with the monodromy of
+        the attempt's first run, at its state (not estimated: the orbit is not a fixed point
+        to Newton); a budget spent ends the point not settled. Returns the next phases."""
         refining = self.refine[idx] > 0
-        self._finish(idx[refining])
-        idx = idx[~refining]
-        tested = idx[self.tested[idx]]
-        self.status[tested] = STATUS.settled
-        self.finals[tested] = self.traj[tested]
-        self.jacobian[tested] = self.first_jacobian[tested]
-        self._release(tested)
-        self._finish(tested)  # (not estimated: the orbit is not a fixed point to Newton)
-        idx = idx[~self.tested[idx]]
-        left = self.run[idx] < self.rows[idx, PARAM.max_periods]
+        tested = ~refining & self.tested[idx]
+        left = ~refining & ~tested & (self.run[idx] < self.rows[idx, PARAM.max_periods])
+        out = ~refining & ~tested & ~left
+        t, o = idx[tested], idx[out]
+        self.status[t] = STATUS.settled
+        self.finals[t] = self.traj[t]
+        self.jacobian[t] = self.first_jacobian[t]
         self._chunk(idx[left])
-        out = idx[~left]
-        self.status[out] = STATUS.not_settled
-        self.finals[out] = self.traj[out]
-        self._finish(out)
+        self.status[o] = STATUS.not_settled
+        self.finals[o] = self.traj[o]
+        return np.where(left, _TRANSIENT, _DONE)
 
     def _diverge(self, idx):
+        """Points ``idx`` diverged: done, their successors start from their own state."""
         self.status[idx] = STATUS.diverged
         self.metrics[idx, :METRIC.orbit_period] = np.nan
         self.strobes[idx] = np.nan
         self.finals[idx] = self.traj[idx]
-        self._finish(idx, diverged=True)
 
     # -- the trajectory ----------------------------------------------------------------
 
@@ -631,8 +660,7 @@ class _Points:
         """Points ``idx`` integrate their trajectory on: as long as all it has run so far
         (at least FIRST_CHUNK periods), or the periods the last attempt's monodromy says
         the motion needs to come NEAR its orbit, within the budget: to its end, or short of
-        it by 2 MAX_ORBIT_PERIOD periods at least."""
-        self.phase[idx] = _TRANSIENT
+        it by 2 MAX_ORBIT_PERIOD periods at least (phase _TRANSIENT)."""
         chunk = np.maximum(self.run[idx], FIRST_CHUNK)
         hint = self.hint[idx]
         chunk = np.where(hint > 0, np.clip(hint, self.p[idx], 4 * chunk), chunk)
@@ -643,9 +671,14 @@ class _Points:
         self.left[idx] = np.where((chunk >= rest) | (rest <= 2 * MAX_ORBIT_PERIOD), rest,
                                   np.minimum(chunk, rest - 2 * MAX_ORBIT_PERIOD))
 
-    def _after_transient(self, idx, m, f, strobes):
+    def _transient(self, idx, m, f, strobes):
+        """The phase _TRANSIENT: a piece of the trajectory's chunk was run (metrics ``m``,
+        end states ``f``, ``strobes``). Returns each point's next phase: _TRANSIENT while the
+        chunk goes on, _NEWTON for an attempt from where it got to, _DONE when it diverged
+        or spent its budget."""
+        phases = np.full(len(idx), _DONE)
         if not idx.size:
-            return
+            return phases
         self.touched[idx] = self._touched(idx, m)
         self.run[idx] += m[:, METRIC.periods_run]
         self.left[idx] -= m[:, METRIC.periods_run]
@@ -654,17 +687,18 @@ class _Points:
         self.strobes[idx] = strobes
         bad = ~sane(m)
         self._diverge(idx[bad])
-        idx, strobes, m = idx[~bad], strobes[~bad], m[~bad]
-        out = self.run[idx] >= self.rows[idx, PARAM.max_periods]
+        out = ~bad & (self.run[idx] >= self.rows[idx, PARAM.max_periods])
         self.status[idx[out]] = STATUS.not_settled
         self.finals[idx[out]] = self.traj[idx[out]]
-        self._finish(idx[out])
-        idx, strobes, m = idx[~out], strobes[~out], m[~out]
+        rest = ~bad & ~out
+        position = np.flatnonzero(rest)
+        idx, strobes, m = idx[rest], strobes[rest], m[rest]
         # the engine's steady-state test passed: Newton polishes the orbit and gives its
         # multipliers; where it cannot (a period map too rough for it), the orbit the test
         # found stands (_give_up)
         settled = m[:, METRIC.status] == STATUS.settled
         on = ~settled & (self.left[idx] > 0)  # the chunk goes on in the next round
+        phases[position] = np.where(on, _TRANSIENT, _NEWTON)
         idx, strobes, m, settled = idx[~on], strobes[~on], m[~on], settled[~on]
         self.tested[idx[settled]] = True
         # (a motion nearing a stable orbit along a multiplier near -1 repeats after twice
@@ -678,17 +712,22 @@ class _Points:
         self.refused[idx] = 0
         self.p[idx] = np.where(settled, m[:, METRIC.orbit_period].astype(np.int64), suggested)
         self._attempt(idx)
+        return phases
 
     # -- error estimate and accuracy -----------------------------------------------------
 
-    def _estimate(self, idx):
-        self.phase[idx] = _ESTIMATE
+    def _start_estimate(self, idx):
+        """Set up the error estimate of the orbits taken (phase _ESTIMATE)."""
         self.iteration[idx] = 0
 
-    def _after_estimate(self, idx, m, f, ok):
-        """Quasi-Newton at twice the steps from the orbit, with its monodromy."""
+    def _estimate(self, idx, m, f, ok):
+        """The phase _ESTIMATE: quasi-Newton at twice the steps from the orbit, with its
+        monodromy. Returns each point's next phase: _ESTIMATE until the orbit at twice the
+        steps is located, then _DONE, or _NEWTON for a re-solve at a finer step where the
+        estimate is above the accuracy target (_refine)."""
+        phases = np.full(len(idx), _ESTIMATE)
         if not idx.size:
-            return
+            return phases
         a = np.eye(self.D) - np.where(ok[:, None, None], self.jacobian[idx], 0.0)
         step = np.zeros((len(idx), self.D))
         if ok.any():
@@ -712,7 +751,7 @@ class _Points:
         failed = last & ~decided
         going = ~converged & ~failed
         self.y[idx[going], :self.D] += step[going]
-        self._finish(idx[failed])
+        phases[failed] = _DONE
         c = idx[converged]
         self.fine[c] = m[converged]
         self.errors[c] = change[converged]
@@ -723,26 +762,26 @@ class _Points:
                              self.refine[c])
         again = (np.isfinite(target) & (self.errors[c] > target) & (self.refine[c] < REFINEMENTS)
                  & (want <= self.max_steps[c]))
-        r = c[again]
-        self.coarser[r] = np.stack([self.steps[r], self.errors[r]], axis=1)
-        self.steps[r] = np.maximum(want[again], self.steps[r] + STEPS_QUANTUM)
-        self.refine[r] += 1
-        self.phase[r] = _NEWTON
-        self.y[r, :self.D] += step[converged][again]  # the orbit at twice the steps: closer
-        self.iteration[r] = 0
-        self.last[r] = np.inf
-        self.touched[r] = self._touched(r, self.metrics[r])
-        self._first_run(r)
-        self._finish(c[~again])
+        self._refine(c[again], want[again], step[converged][again])
+        phases[converged] = np.where(again, _NEWTON, _DONE)
+        return phases
+
+    def _refine(self, idx, steps, step):
+        """Set up the re-solve of points ``idx`` at ``steps`` steps per period (at least
+        STEPS_QUANTUM more), from their orbit moved by ``step``, Newton's step towards the
+        orbit at twice the steps (phase _NEWTON)."""
+        self.coarser[idx] = np.stack([self.steps[idx], self.errors[idx]], axis=1)
+        self.steps[idx] = np.maximum(steps, self.steps[idx] + STEPS_QUANTUM)
+        self.refine[idx] += 1
+        self.y[idx, :self.D] += step  # the orbit at twice the steps: closer
+        self.iteration[idx] = 0
+        self.last[idx] = np.inf
+        self.touched[idx] = self._touched(idx, self.metrics[idx])
+        self._first_run(idx)
 
     # -- the end of a point --------------------------------------------------------------
 
-    def _finish(self, idx, diverged=False):
-        """Points ``idx`` are done."""
-        self.phase[idx] = _DONE
-        self._release(idx, diverged)
-
-    def _release(self, idx, diverged=False):
+    def _release(self, idx):
         """The successors of points ``idx`` start from their orbit (from their own initial
         state after a divergence), once."""
         idx = idx[~self.released[idx]]
@@ -752,9 +791,9 @@ class _Points:
         follow, nxt = idx[has], nxt[has]
         if not nxt.size:
             return
-        if not diverged:
-            self.begin[nxt] = self.finals[follow]
-            self.touched[nxt] = self._touched(follow, self.metrics[follow])
+        kept = self.status[follow] != STATUS.diverged
+        self.begin[nxt[kept]] = self.finals[follow[kept]]
+        self.touched[nxt[kept]] = self._touched(follow[kept], self.metrics[follow[kept]])
         self.p[nxt] = np.where(self.status[follow] == STATUS.settled, self.p[follow], 1)
         self.start(nxt)
 
