@@ -352,7 +352,7 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
         cuts = np.flatnonzero((np.diff(stable.astype(int)) != 0) | (np.diff(branch) != 0)) + 1
         for start, stop in zip(np.r_[0, cuts], np.r_[cuts, len(lam)]):
             end = stop + 1 if stop < len(lam) and branch[stop] == branch[start] else stop
-            ax.plot(x[start:end], y[start:end], color="k", lw=1.2,
+            ax.plot(x[start:end], y[start:end], color="k", lw=1.2, zorder=3.5,  # (over dots)
                     ls="-" if stable[start] else "--")
         ax.plot([], [], color="k", lw=1.2, label="stable")
         ax.plot([], [], color="k", lw=1.2, ls="--", label="unstable")
@@ -430,6 +430,8 @@ def _mark_bifurcations(ax, found: list, x, y, x_scale: float) -> None:
         if any(b["kind"] == kind for b in found):
             style = _BIFURCATION_MARKS[kind]
             ax.plot([], [], ls="none", label=kind.replace("_", " "), **style)
+    if not all(b["located"] for b in found):
+        ax.plot([], [], color="0.5", lw=4, alpha=0.45, label="not located: its bracket")
     order = sorted(found, key=lambda b: -_BIFURCATION_MARKS[b["kind"]]["ms"])
     for z, b in enumerate(order):
         i, style = b["index"], dict(_BIFURCATION_MARKS[b["kind"]])

@@ -168,6 +168,7 @@ def test_a_failed_location_is_printed_and_drawn_as_its_bracket(s_curve):
     top = fig.axes[0]
     text = [t.get_text() for t in _labels(top) if "not located" in t.get_text()]
     assert text == [f"fold, not located: {value - 7.5:.4g} to {value + 7.5:.4g} Hz"]
+    assert "not located: its bracket" in [t.get_text() for t in top.get_legend().get_texts()]
     bars = [line for line in top.get_lines() if line.get_gid() == "bracket"]
     assert len(bars) == 1
     np.testing.assert_allclose(bars[0].get_xdata(), [value - 7.5, value + 7.5])
