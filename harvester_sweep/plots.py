@@ -311,8 +311,8 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
     (sweep datasets along the same parameter), when given. A lower stop's grazing is drawn
     on x_min, against the lower stop.
 
-    ``scales``: ``{parameter: "log" or "linear"}``; by default log where the branch spans
-    two decades or more.
+    ``scales``: ``{parameter: "log" or "linear"}``; by default log where the branch, or the
+    range asked of it, spans two decades or more.
 
     Raises
     ------
@@ -327,7 +327,10 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
     fig = _new_figure((9, 3.2 * len(names) + 0.6))
     panels = fig.subplots(len(names), 1, sharex=True)
     lam = ds[axis].values
-    log = _is_log(ds, axis, lam, scales)
+    # (the range asked for counts too: a branch asked from 100 Ohm to 10 MOhm reads on a
+    # log axis even where it ended early)
+    asked = np.r_[lam, float(ds.attrs["start"]), float(ds.attrs["stop"])]
+    log = _is_log(ds, axis, asked, scales)
     x_scale, x_label = _axis(ds, axis, lam, log)
     x = lam / x_scale
     stable = ds["stable"].values.astype(bool)

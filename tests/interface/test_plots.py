@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 from matplotlib.text import Text
 
-from harvester_sweep import basin_fractions, continue_branch, resolve_parameters, run_scene
+from harvester_sweep import (
+    basin_fractions,
+    basin_map,
+    continue_branch,
+    resolve_parameters,
+    run_scene,
+)
 from harvester_sweep.cli import _bifurcation_table
 from harvester_sweep.plots import bifurcation_points, plot_basins, plot_branch, plot_sweep
 from harvester_sweep.sweep import run_sweep
@@ -72,6 +78,9 @@ def test_a_branch_over_decades_is_drawn_on_a_log_axis_unless_the_user_says_linea
     linear = plot_branch(branch, scales={"resistance": "linear"}).axes
     assert [ax.get_xscale() for ax in linear] == ["linear", "linear"]
     assert plot_branch(s_curve).axes[-1].get_xscale() == "linear"
+    early = _relabelled(s_curve, "resistance", np.geomspace(100.0, 4865.0, lam.size))
+    early.attrs["stop"] = 1e7  # (asked for 10 MOhm, stalled at 4.9 kOhm)
+    assert plot_branch(early).axes[-1].get_xscale() == "log"
     with pytest.raises(ValueError, match="frequency"):
         plot_branch(branch, scales={"frequency": "log"})
 
@@ -104,6 +113,14 @@ def test_lengths_are_in_um_with_no_offset_on_branches_maps_and_lines(s_curve):
         line.get_suptitle()
     assert line.axes[1].get_ylabel() == f"x_max [{UM}]"
     assert all(a.xaxis.get_offset_text().get_text() == "" for a in line.axes)
+
+    basins = basin_map({"gap": [1e-6, 2e-6], "frequency": [200.0, 240.0]}, "paper",
+                       samples=4, shock=0.01, steps_per_period=256)
+    fig = plot_basins(basins)
+    _drawn(fig)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == f"gap [{UM}]" and ax.yaxis.get_offset_text().get_text() == ""
+    np.testing.assert_allclose(ax.collections[0].get_coordinates()[:, 0, 1], [0.5, 1.5, 2.5])
 
 
 @pytest.fixture(scope="module")
