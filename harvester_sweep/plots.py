@@ -252,9 +252,9 @@ def bifurcation_points(ds) -> list[dict]:
 
     Each a dict: ``index`` (its point), ``kind`` (fold, period_doubling, neimark_sacker,
     grazing), ``stop`` (a grazing's stop: "upper" or "lower"; else None), ``value`` (the
-    parameter at the point), ``located`` (whether the bracket reached continuation's
-    precision), ``low`` and ``high`` (the interval in the parameter that holds it: the
-    value +- the bracket's width, ``<parameter>_precision``).
+    parameter at the point), ``located`` (whether its bracket is within ``_LOCATED`` of
+    the parameter: the location converged), ``low`` and ``high`` (the interval in the
+    parameter that holds it: the value +- the bracket's width, ``<parameter>_precision``).
     """
     name = ds.attrs["continued_parameter"]
     lam = ds[name].values
@@ -342,7 +342,7 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
         log_y = name == "power"
         scale, y_label = _axis(ds, name, ds[name].values, log_y)
         y = ys[name] = ds[name].values / scale
-        for sweep in sweeps:
+        for sweep in (sweep for sweep in sweeps if name in sweep):  # (x_min if it was asked)
             dims = [d for d in sweep[name].dims if d != "direction"]
             if dims != [axis]:
                 raise ParameterError(f"a sweep drawn under a branch must run along {axis} "
