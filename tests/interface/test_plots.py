@@ -113,6 +113,11 @@ def test_lengths_are_in_um_with_no_offset_on_branches_maps_and_lines(s_curve):
         line.get_suptitle()
     assert line.axes[1].get_ylabel() == f"x_max [{UM}]"
     assert all(a.xaxis.get_offset_text().get_text() == "" for a in line.axes)
+    assert [x.get_label() for x in line.axes[1].get_lines()][-1] == "stop"  # x_max = gap
+    sliced = plot_sweep(ds.sel(gap=1e-6))  # (the selected gap: in the title, as the stop)
+    assert f"gap = 1 {UM}" in sliced.get_suptitle()
+    stop = [x for x in sliced.axes[1].get_lines() if x.get_label() == "stop"]
+    assert len(stop) == 1 and stop[0].get_ydata()[0] == pytest.approx(1.0)
 
     basins = basin_map({"gap": [1e-6, 2e-6], "frequency": [200.0, 240.0]}, "paper",
                        samples=4, shock=0.01, steps_per_period=256)
