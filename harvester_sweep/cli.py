@@ -516,7 +516,9 @@ def _note_derived_stiffness(preset, fixed: dict, varied) -> None:
         print("harvester-sweep: note: hertz_stiffness is derived at each point from "
               "stop_mass, the tip's mass and the materials (Goldsmith)", file=sys.stderr)
         return
-    text = derived_stiffness(resolve_parameters(preset, **fixed))
+    with warnings.catch_warnings():  # (the run itself warns of its step, once)
+        warnings.simplefilter("ignore")
+        text = derived_stiffness(resolve_parameters(preset, **fixed))
     if text:
         print(f"harvester-sweep: note: {text}", file=sys.stderr)
 
