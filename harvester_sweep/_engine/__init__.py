@@ -21,6 +21,14 @@ final states. One concept per module:
 - ``cache``: numba's on-disk cache kept in step with this source.
 """
 
+import os
+
+# numba's OpenMP threads spin while they wait for the next parallel call, by default: on a
+# machine shared with other work that spinning takes the cores the working threads need,
+# and the orbit solver makes many short calls (issue 44). They sleep instead, unless the
+# user says otherwise (read when numba first starts its threads).
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+
 from ..models import hertz, tip_mass
 from . import booking, cache, hermite, lanes, monodromy, rk4, scheduler, steady, stop_motion
 from .cache import SOURCE_DIGEST

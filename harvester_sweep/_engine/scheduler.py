@@ -216,7 +216,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     # stages.
     work = params[heads, PARAM.max_periods] * params[heads, PARAM.steps]
     heads = heads[np.lexsort((-params[heads, PARAM.period], -work))]
-    threads = max(1, min(numba.get_num_threads(), len(heads)))
+    threads = call_threads(params, len(heads))
     control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
     args = (params, states, metrics, strobes, successors, heads, control, settle)
     if on_points is None:
@@ -251,6 +251,22 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
 
 
 _POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
+
+#: A call whose budget (periods x steps, summed over its points) is below this many RK4
+#: steps runs on one thread: it lasts about as long as starting and joining numba's
+#: threads costs, and on a shared machine every thread of a call waits for the slowest,
+#: one that is descheduled most of all (issue 44) [steps].
+SHORT_CALL = 200_000
+
+
+def call_threads(params: np.ndarray, lines: int) -> int:
+    """The threads a call of :func:`run_points` takes: one for a short call
+    (SHORT_CALL), else one for every LANES lines (a thread steps LANES points at once, so
+    a thread more gains nothing below that), at most numba's thread count."""
+    budget = float(np.sum(params[:, PARAM.max_periods] * params[:, PARAM.steps]))
+    if budget < SHORT_CALL:
+        return 1
+    return max(1, min(numba.get_num_threads(), -(-lines // LANES)))
 
 
 def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
