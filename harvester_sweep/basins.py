@@ -44,7 +44,7 @@ from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
 from .parameters import PRESET_NOTES, ParameterError, is_number, resolve_parameters
 from .results import solve
-from .run_estimate import LONG_RUN_SECONDS, estimate_basins
+from .run_estimate import announce, estimate_basins
 from .sweep_file import axis, check_grid_size
 
 #: Two final states belong to one attractor when they differ by less than this, relative to
@@ -259,13 +259,8 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
     base, axes, spacing = spec.base, spec.axes, spec.spacing
     import numba
 
-    work = estimate_basins(spec, numba.get_num_threads())
-    if work.long and not yes:
-        raise ParameterError(
-            f"{work.describe()}, beyond {LONG_RUN_SECONDS / 3600:g} h: start it with --yes "
-            "(yes=True in Python), or make the grid coarser or the samples fewer")
-    if progress:
-        print(f"harvester-sweep: {work.describe()}", file=sys.stderr, flush=True)
+    announce(estimate_basins(spec, numba.get_num_threads()), yes, progress,
+             "make the grid coarser or the samples fewer")
     for i in range(spec.n_points):  # (bad input fails before any integration)
         check_runnable(spec.point(i))
     found = _solve(spec, progress)

@@ -15,6 +15,7 @@ progress bar's ETA, from the measured rate, takes over once the sweep runs.
 from __future__ import annotations
 
 import math
+import sys
 import warnings
 from dataclasses import dataclass
 
@@ -23,6 +24,7 @@ import numpy as np
 from . import timescales
 from .acceptance import NEAR
 from .linear import linear_response
+from .parameters import ParameterError
 from .period_map import D
 
 #: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
@@ -107,6 +109,18 @@ def _mean_steps(n_points: int, point) -> float:
     with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
         warnings.simplefilter("ignore")
         return float(np.mean([point_steps(point(int(i))) for i in picks]))
+
+
+def announce(work: RunEstimate, yes: bool, progress: bool, smaller: str) -> None:
+    """Refuse a run ``work`` longer than LONG_RUN_SECONDS unless ``yes`` (ParameterError,
+    one line that says how to make it ``smaller``), else say its size on stderr when
+    ``progress``."""
+    if work.long and not yes:
+        raise ParameterError(
+            f"{work.describe()}, beyond {LONG_RUN_SECONDS / 3600:g} h: start it with --yes "
+            f"(yes=True in Python), or {smaller}")
+    if progress:
+        print(f"harvester-sweep: {work.describe()}", file=sys.stderr, flush=True)
 
 
 def point_steps(p: dict) -> float:

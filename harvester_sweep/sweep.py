@@ -17,7 +17,7 @@ from tqdm import tqdm
 from .chunk_store import ChunkStore, MemoryStore, StoreError, write_failure
 from .chunks import chunk_points, compute_chunk
 from .parameters import ParameterError, is_number, value_text
-from .run_estimate import LONG_RUN_SECONDS, estimate
+from .run_estimate import announce, estimate
 from .sweep_file import load_sweep
 
 
@@ -83,13 +83,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     with store:  # (holds the output's lock until the file is written)
         finished = [chunk for chunk in store.present() if store.has(chunk)]
         remaining = spec.n_points - sum(chunk_points(spec, chunk) for chunk in finished)
-        work = estimate(spec, remaining, _threads(workers, scheduler))
-        if work.long and not yes:
-            raise ParameterError(
-                f"{work.describe()}, beyond {LONG_RUN_SECONDS / 3600:g} h: start it with "
-                "--yes (yes=True in Python), or make the grid coarser")
-        if progress:
-            print(f"harvester-sweep: {work.describe()}", file=sys.stderr, flush=True)
+        announce(estimate(spec, remaining, _threads(workers, scheduler)), yes, progress,
+                 "make the grid coarser")
         finished = set(finished)
         todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]
         done = spec.n_points - remaining

@@ -19,8 +19,11 @@ Out of contact the system is linear (:func:`linear_system`), and so is its RK4 s
 
 What is derived from this declaration: the engine's state rows and their sizes
 (``_engine.layouts``), the orbits' component scales (``period_map.orbit_scales``), the
-basins' box, the no-contact proof's bound (``acceptance``), the closed-form linear
-response (``linear``) and the tests' SciPy reference.
+basins' box, the no-contact proof's bound (``acceptance``), the response without the stop
+(``linear``), the solver's first scales (``orbits``) and the step's coupled rate
+(``timescales``). The tests hold it against references written apart from it: the
+textbook phasor, the Hertz law's closed forms, SciPy on the same equations
+(tests/physics/test_model_declaration.py, tests/helpers.py).
 """
 
 from __future__ import annotations
