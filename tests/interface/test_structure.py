@@ -181,3 +181,13 @@ def test_every_status_has_a_cf_flag_and_every_output_cf_attributes():
     assert flags["flag_meanings"].split() == [s.name.replace(" ", "_") for s in outputs.STATUSES]
     for output in outputs.OUTPUTS.values():
         assert output.attrs["units"] and output.attrs["long_name"], output.name
+
+
+def test_every_subpackage_is_installed():
+    """pyproject.toml lists every folder of the package (the tests run from the source tree
+    and would not see one left out; the notebooks and users would)."""
+    import tomllib
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    folders = {_module_name(p) for p in PACKAGE.rglob("__init__.py")}
+    assert folders == listed, folders ^ listed
