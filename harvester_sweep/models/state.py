@@ -15,9 +15,6 @@ from collections import namedtuple
 #: orbit's peak voltage and the voltage an amplitude X induces.
 Component = namedtuple("Component", ("name", "unit", "scale", "meaning"))
 
-#: The kinds of scale a component may have.
-SCALES = ("displacement", "velocity", "voltage")
-
 
 def describe(components) -> tuple:
     """(name, "meaning [unit]") of each component, as a layout's fields."""

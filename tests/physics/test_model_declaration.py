@@ -13,6 +13,16 @@ from harvester_sweep.linear import linear_response
 from harvester_sweep.models import hertz, tip_mass
 
 
+def _textbook_system(p):
+    """d(x, v, V)/dt = M (x, v, V) + b a(t) without the stop, from docs/model.md's
+    equations: m x'' = m a - k x - c x' + theta V, C_p V' = -V / R - theta x'."""
+    m, wn = p["mass"], 2 * np.pi * p["natural_frequency"]
+    k, c = m * wn**2, 2 * p["damping_ratio"] * m * wn
+    th, cp, r = p["coupling"], p["capacitance"], p["resistance"]
+    return (np.array([[0, 1, 0], [-k / m, -c / m, th / m], [0, -th / cp, -1 / (r * cp)]]),
+            np.array([0.0, 1.0, 0.0]))
+
+
 def _textbook(p, frequency):
     """X and V of the harvester without its stop, in closed form (docs/model.md)."""
     m, wn = p["mass"], 2 * np.pi * p["natural_frequency"]
@@ -40,10 +50,17 @@ def test_linear_response_is_the_textbook_phasor(preset):
 
 @pytest.mark.parametrize("preset", ["paper", "strong_coupling"])
 def test_linear_system_is_the_compiled_right_hand_side_off_the_stop(preset):
+    """The declared linear system, and the compiled right-hand side with the coefficients
+    packing gives the engine, are both the textbook equations."""
+    from harvester_sweep import packing
+    from harvester_sweep._engine import PARAM
     p = resolve_parameters(preset)
-    M, b = tip_mass.linear_system(**p)
-    wn2, cm = M[1, 0] * -1, M[1, 1] * -1
-    k = tip_mass.Coefficients(wn2, cm, M[1, 2], 1e9, 1.0, 0.0, -M[2, 2], -M[2, 1])
+    M, b = _textbook_system(p)
+    declared, declared_b = tip_mass.linear_system(**p)
+    assert np.allclose(declared, M, rtol=1e-14, atol=0) and np.array_equal(declared_b, b)
+    r = packing.pack_parameters(p)
+    k = tip_mass.Coefficients(r[PARAM.wn2], r[PARAM.cm], r[PARAM.thm], 1e9, 1.0, 0.0,
+                              r[PARAM.irc], r[PARAM.thc])
     rng = np.random.default_rng(3)
     for _ in range(20):
         y = rng.normal(size=3) * np.array([1e-6, 1e-3, 1.0])
@@ -73,7 +90,7 @@ def test_hertz_law_closed_form_clip_and_switches():
 def test_excursion_bound_contains_the_free_motion(preset):
     """No free, decaying motion from a deviation goes beyond the energy bound (SciPy)."""
     p = resolve_parameters(preset)
-    M, _ = tip_mass.linear_system(**p)
+    M, _ = _textbook_system(p)
     wn2, thm, thc = -M[1, 0], M[1, 2], -M[2, 1]
     rng = np.random.default_rng(7)
     T = 1 / p["natural_frequency"]
