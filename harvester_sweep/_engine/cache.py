@@ -7,6 +7,10 @@ one of those alone (an editable install), they would run the old code. A digest 
 whole engine's source is kept beside the cache; when it differs, every cached function of
 the engine is dropped and compiled again. The same digest identifies the engine in a
 sweep's hash, so that a partial result is never resumed by another engine.
+
+Each engine has its own digest, of the files its machine code is made from: the lane
+engine of the tip-mass model is not recompiled when the beam's modal engine is edited, and
+a run compiles only the engine of the model it uses.
 """
 
 from __future__ import annotations
@@ -17,16 +21,20 @@ from pathlib import Path
 import numba
 
 _HERE = Path(__file__).parent
-#: The source the engine's machine code is made from: its own, the models', the flags'.
-_SOURCES = (_HERE, _HERE.parent / "models", _HERE.parent / "jit.py")
+_PACKAGE = _HERE.parent
+#: The source the lane engine's machine code is made from: its own files, the models it
+#: runs, the flags.
+_SOURCES = (_HERE, _PACKAGE / "models" / "hertz.py", _PACKAGE / "models" / "state.py",
+            _PACKAGE / "models" / "tip_mass.py", _PACKAGE / "jit.py")
 
 
-def source_digest() -> str:
-    """SHA-256 of the engine's source files (:data:`_SOURCES`), in name order."""
+def source_digest(sources=_SOURCES) -> str:
+    """SHA-256 of source files (folders: their ``*.py``, not below), in the order given
+    and name order within a folder."""
     digest = hashlib.sha256()
-    files = [p for s in _SOURCES for p in (sorted(s.glob("*.py")) if s.is_dir() else [s])]
+    files = [p for s in sources for p in (sorted(s.glob("*.py")) if s.is_dir() else [s])]
     for path in files:
-        digest.update(path.relative_to(_HERE.parent).as_posix().encode() + b"\0"
+        digest.update(path.relative_to(_PACKAGE).as_posix().encode() + b"\0"
                       + path.read_bytes())
     return digest.hexdigest()
 
@@ -42,19 +50,19 @@ def _dispatchers(modules):
                 yield value
 
 
-def flush_if_changed(entry, modules) -> None:
+def flush_if_changed(entry, modules, digest=SOURCE_DIGEST) -> None:
     """Drop the cached machine code of every jitted function of ``modules`` when the
-    engine's source has changed since ``entry`` (a dispatcher) was cached."""
+    engine's source (``digest``) has changed since ``entry`` (a dispatcher) was cached."""
     cache = getattr(entry, "_cache", None)
     if cache is None or not hasattr(cache, "cache_path"):
         return
     marker = Path(cache.cache_path) / "engine-source-sha256"
     try:
-        if marker.exists() and marker.read_text() == SOURCE_DIGEST:
+        if marker.exists() and marker.read_text() == digest:
             return
         for dispatcher in _dispatchers(modules):
             dispatcher._cache.flush()
-        marker.write_text(SOURCE_DIGEST)
+        marker.write_text(digest)
         _FLUSHED.append(True)
     except OSError:  # an unwritable cache: numba recompiles or falls back by itself
         pass
