@@ -1,10 +1,14 @@
-"""Materials of the tip mass and the stop, and Hertz stiffness from two bodies.
+"""Materials of the tip mass, the stop and the beam, and Hertz stiffness from two bodies.
 
 Elastic constants: N. E. Dowling, *Mechanical Behavior of Materials*, 4th ed. (Pearson, 2013),
 Table 5.2, which takes the metals from H. E. Boyer and T. L. Gall (eds.), *Metals Handbook Desk
 Edition* (ASM, 1985), p. 216 -- the handbook the paper cites. Densities at room temperature:
 *CRC Handbook of Chemistry and Physics*, 97th ed. (2016), "Density of solids" (pure metals), and
 ASM Metals Handbook Desk Edition for steel and brass.
+
+Piezoceramics (the bimorph's layers, harvester_sweep/bimorph.py): the manufacturers' data
+sheets for PZT-5A and PZT-5H (Morgan Electro Ceramics, Piezo Systems), the constants A. Erturk
+and D. J. Inman, *Piezoelectric Energy Harvesting* (Wiley, 2011) use for their bimorphs.
 """
 
 from __future__ import annotations
@@ -43,6 +47,48 @@ MATERIALS: dict[str, Material] = {
     "brass": Material(101e9, 0.350, 8530.0, _DOWLING + " (70Cu-30Zn); density ASM"),
     "titanium": Material(120e9, 0.361, 4506.0, _DOWLING + "; density CRC Handbook"),
     "tungsten": Material(411e9, 0.280, 19300.0, _DOWLING + "; density CRC Handbook"),
+}
+
+
+EPSILON_0 = 8.854187817e-12
+"""Vacuum permittivity. [F/m]"""
+
+
+@dataclass(frozen=True)
+class PiezoMaterial:
+    """Piezoelectric ceramic of a bending layer, poled through its thickness (3), strained
+    along the beam (1).
+
+    Attributes
+    ----------
+    youngs_modulus : float
+        Young's modulus at constant electric field, Y_p = 1 / s11^E. [Pa]
+    density : float
+        Mass density rho_p. [kg/m^3]
+    d31 : float
+        Piezoelectric strain constant (negative for PZT: a field along the poling shortens
+        the layer). [m/V]
+    permittivity : float
+        Permittivity at constant stress, eps33^T. [F/m]
+    source : str
+        Where the values come from.
+    """
+
+    youngs_modulus: float
+    density: float
+    d31: float
+    permittivity: float
+    source: str
+
+
+_ERTURK = "manufacturer data sheet, as used by Erturk & Inman (2011)"
+PIEZO_MATERIALS: dict[str, PiezoMaterial] = {
+    # Y_p = 1 / s11^E with s11^E = 16.4e-12 m^2/N; eps33^T = 1700 eps_0
+    "PZT-5A": PiezoMaterial(1.0 / 16.4e-12, 7750.0, -171e-12, 1700 * EPSILON_0,
+                            _ERTURK + ": s11E 16.4e-12 m^2/N, eps33T/eps0 1700"),
+    # s11^E = 16.5e-12 m^2/N; eps33^T = 3400 eps_0
+    "PZT-5H": PiezoMaterial(1.0 / 16.5e-12, 7500.0, -274e-12, 3400 * EPSILON_0,
+                            _ERTURK + ": s11E 16.5e-12 m^2/N, eps33T/eps0 3400"),
 }
 
 

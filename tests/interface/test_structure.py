@@ -101,7 +101,7 @@ LAYERS = (
     ("version", "jit"),
     ("models",),
     ("_engine",),
-    ("contact", "materials", "linear"),
+    ("contact", "materials", "linear", "bimorph", "rod"),
     ("timescales",),
     ("parameters",),
     ("outputs", "packing"),
