@@ -3,9 +3,10 @@
 The model declares itself, clear of its stops, as ``y' = M y + b a(t)`` (its
 ``linear_system``); under the base acceleration ``a(t) = A sin(w t) = Im(A e^{j w t})`` the
 steady state is ``y = Im(Y e^{j w t})`` with ``(j w I - M) Y = b A``. For the tip-mass
-model this is the textbook closed form (docs/model.md)::
+model this is the textbook closed form (docs/model.md), its forcing corrected by the
+base-forcing factor mu_1 (1 in the paper's model; ``A`` stands for mu_1 A above)::
 
-    X = m A / (k - m w^2 + j w c + j w theta^2 R / (1 + j w R C_p)),
+    X = m mu_1 A / (k - m w^2 + j w c + j w theta^2 R / (1 + j w R C_p)),
     V = -j w theta R X / (1 + j w R C_p)
 """
 
@@ -16,7 +17,7 @@ import numpy as np
 from .models import tip_mass
 
 
-def linear_response(amplitude, frequency, **parameters):
+def linear_response(amplitude, frequency, base_forcing_factor=1.0, **parameters):
     """Complex amplitudes of x = Im(X e^{j w t}) and V = Im(V e^{j w t}) with no stop.
 
     Parameters
@@ -25,6 +26,9 @@ def linear_response(amplitude, frequency, **parameters):
         Base acceleration amplitude A [m/s^2].
     frequency : float or numpy.ndarray
         Excitation frequency f [Hz].
+    base_forcing_factor : float or numpy.ndarray
+        The base-forcing correction mu_1 [-]: the tip is forced by mu_1 A (1: the paper's
+        model).
     **parameters
         The model's parameters its linear system reads (the tip-mass model: mass [kg],
         natural_frequency [Hz], damping_ratio [-], coupling [N/V], capacitance [F],
@@ -39,7 +43,8 @@ def linear_response(amplitude, frequency, **parameters):
     V : complex numpy.ndarray
         Voltage amplitude [V]; the mean power is |V|^2 / (2 R) [W].
     """
-    return phasor(*tip_mass.linear_system(**parameters), amplitude, frequency)
+    forcing = np.multiply(base_forcing_factor, amplitude)  # mu_1 A [m/s^2]
+    return phasor(*tip_mass.linear_system(**parameters), forcing, frequency)
 
 
 def phasor(m, b, amplitude, frequency):

@@ -18,7 +18,7 @@ from . import timescales
 from ._engine import NO_STOP, PARAM, STATE
 from .contact import contact_damping_of, damping_factor, lower_stop
 from .models import hertz
-from .parameters import TooStiffError
+from .parameters import TooStiffError, forcing_amplitude
 
 
 def pack_parameters(p: dict) -> np.ndarray:
@@ -26,7 +26,8 @@ def pack_parameters(p: dict) -> np.ndarray:
     wn = 2.0 * math.pi * p["natural_frequency"]
     m = p["mass"]
     row = np.zeros(len(PARAM))
-    row[PARAM.amplitude] = p["amplitude"]
+    # (the tip's forcing mu_1 A; a moving stop shares it, hence mu_1 = 1 beside one)
+    row[PARAM.amplitude] = forcing_amplitude(p)
     row[PARAM.wn2] = wn * wn
     row[PARAM.cm] = 2.0 * p["damping_ratio"] * wn
     row[PARAM.thm] = p["coupling"] / m
@@ -39,7 +40,7 @@ def pack_parameters(p: dict) -> np.ndarray:
     row[PARAM.steps] = p["steps_per_period"]
     row[PARAM.max_periods] = 0.0 if refusal(p) else p["max_periods"]
     row[PARAM.tolerance] = p["settle_tolerance"]
-    static = p["amplitude"] / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
+    static = forcing_amplitude(p) / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
     row[PARAM.x_limit] = 1e3 * (abs(p["gap"]) + static + 1e-9)
     row[PARAM.locate] = 1.0 if p["locate_switches"] else 0.0
     w = 2.0 * math.pi * p["frequency"]

@@ -138,6 +138,9 @@ PARAMETERS: dict[str, Parameter] = {
         _P("capacitance", "F", "piezo capacitance C_p", low=0, low_open=True),
         _P("resistance", "Ohm", "load resistance R", low=0, low_open=True),
         _P("amplitude", "m/s^2", "base acceleration amplitude A (the paper's Y)", low=0),
+        _P("base_forcing_factor", "1", "base-forcing correction mu_1: the tip is forced by "
+           "m mu_1 A sin(w t); the one-mode reduction of a beam has m_eq mu_1 A as its "
+           "forcing; 1: the paper's model", low=0, high=10, low_open=True),
         _P("frequency", "Hz", "excitation frequency f", low=0, low_open=True),
         _P("gap", "m", "distance from rest to the stop g (<= 0: preloaded stop)"),
         _P("hertz_stiffness", "N/m^1.5", "Hertz contact stiffness k_h (0: no stop)", low=0),
@@ -225,6 +228,7 @@ _TABLE_1 = dict(
     capacitance=100e-9,
     resistance=10e3,
     amplitude=1.0,
+    base_forcing_factor=1.0,
     frequency=140.0,
     gap=1e-6,
     hertz_stiffness=9.03e8,
@@ -304,6 +308,13 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
         raise ParameterError(
             f"lower_gap [m] = {value_text(checked['lower_gap'])}: a second stop beside a moving "
             f"one (stop_support_stiffness) is not modelled: leave lower_gap unset")
+    if moving and checked["base_forcing_factor"] != 1.0:
+        # (the engine forces tip and moving stop with one acceleration, and the stop, a
+        # lumped body on the base, takes A, not mu_1 A)
+        raise ParameterError(
+            f"base_forcing_factor [-] = {value_text(checked['base_forcing_factor'])}: beside a "
+            f"moving stop (stop_support_stiffness), a body on the base forced by A while the tip "
+            f"is forced by mu_1 A, only 1 is modelled: leave base_forcing_factor at 1")
     explicit = overrides.get("hertz_stiffness") is not None
     if overrides.get("stop_mass") is not None and explicit and not moving:
         raise ParameterError(
@@ -332,6 +343,13 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
             f"({type(error).__name__}): give values of physical magnitude in SI units"
         ) from None
     return checked
+
+
+def forcing_amplitude(p: dict) -> float:
+    """The amplitude of the tip's forcing acceleration mu_1 A [m/s^2] of a validated
+    parameter set: base_forcing_factor [-] times amplitude [m/s^2] (a moving stop is
+    forced by A alone, and only mu_1 = 1 is taken beside one)."""
+    return p["base_forcing_factor"] * p["amplitude"]
 
 
 def check_names(names) -> None:

@@ -138,16 +138,17 @@ def time_scales(p: dict) -> TimeScales:
 
 #: The parameters the stop-free velocity estimate reads.
 _LINEAR = ("mass", "natural_frequency", "damping_ratio", "coupling", "capacitance",
-           "resistance", "amplitude", "frequency")
+           "resistance", "amplitude", "frequency", "base_forcing_factor")
 
 
 @functools.lru_cache(maxsize=65536)  # (a grid's other axes repeat these: the gap's, say)
 def _free_velocity(mass, natural_frequency, damping_ratio, coupling, capacitance, resistance,
-                   amplitude, frequency) -> float:
+                   amplitude, frequency, base_forcing_factor) -> float:
     """The larger velocity amplitude [m/s] of the stop-free response at the forcing and at
     the natural frequency (SI parameters as in parameters.PARAMETERS)."""
     # At least 0.1 % damping in the estimate: an undamped resonance has no finite amplitude.
-    X, _ = linear_response(amplitude, np.array([frequency, natural_frequency]), mass=mass,
+    X, _ = linear_response(amplitude, np.array([frequency, natural_frequency]),
+                           base_forcing_factor=base_forcing_factor, mass=mass,
                            natural_frequency=natural_frequency,
                            damping_ratio=max(damping_ratio, 1e-3), coupling=coupling,
                            capacitance=capacitance, resistance=resistance)

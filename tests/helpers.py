@@ -17,13 +17,14 @@ from scipy.integrate import solve_ivp
 
 
 def phasor(mass, natural_frequency, damping_ratio, coupling, capacitance, resistance,
-           amplitude, frequency, **_):
-    """Complex amplitudes (X [m], V [V]) of the linear steady state x = Im(X e^{j w t})."""
+           amplitude, frequency, base_forcing_factor=1.0, **_):
+    """Complex amplitudes (X [m], V [V]) of the linear steady state x = Im(X e^{j w t}) of
+    m x'' + c x' + k x - theta V = m mu_1 A sin(w t), C_p V' + V / R + theta x' = 0."""
     wn = 2 * math.pi * natural_frequency
     w = 2 * math.pi * frequency
     k, c = mass * wn**2, 2 * damping_ratio * mass * wn
     electrical = 1j * w * coupling**2 * resistance / (1 + 1j * w * resistance * capacitance)
-    X = mass * amplitude / (k - mass * w**2 + 1j * w * c + electrical)
+    X = mass * base_forcing_factor * amplitude / (k - mass * w**2 + 1j * w * c + electrical)
     V = -1j * w * coupling * resistance * X / (1 + 1j * w * resistance * capacitance)
     return X, V
 
@@ -42,7 +43,7 @@ def lankarani_nikravesh_damping(restitution, impact_velocity):
 
 
 class Reference:
-    """SciPy integration of m x'' + c x' + k x + F_c - theta V = m A sin(w t),
+    """SciPy integration of m x'' + c x' + k x + F_c - theta V = m mu_1 A sin(w t),
     C_p V' + V/R + theta x' = 0, with F_c = max(k_h (x-g)^1.5 (1 + c_h x'), 0) in contact.
 
     The state carries five quadratures: int V^2 dt, and the work of the base forcing,
@@ -74,7 +75,8 @@ class Reference:
         p = self.p
         x, v, V = y[0], y[1], y[2]
         fc = self.contact_force(x, v) if in_contact else 0.0
-        forcing = self.m * p["amplitude"] * math.sin(self.w * t)
+        forcing = self.m * p.get("base_forcing_factor", 1.0) * p["amplitude"] * math.sin(
+            self.w * t)
         a = (forcing - self.c * v - self.k * x - fc + p["coupling"] * V) / self.m
         dV = -(V / p["resistance"] + p["coupling"] * v) / p["capacitance"]
         return [v, a, dV, V * V, forcing * v, self.c * v * v, fc * v, V * V / p["resistance"]]
