@@ -409,7 +409,7 @@ def _bifurcation_table(ds) -> str:
     scale, shown = (1e-6, _UM) if unit == "m" else (1.0, unit)
     lines = [f"branch of {name} from {ds.attrs['start'] / scale:g} to "
              f"{ds.attrs['stop'] / scale:g} {shown}: "
-             f"{ds.sizes['point']} points in {ds.attrs['run_time']:.3g} s at "
+             f"{ds.sizes['point']} points in {ds.attrs['run_time']:.3g} s, followed at "
              f"{ds.attrs['steps_per_period']} steps per period; {ds.attrs['ends']}",
              ""]
     rows = []
@@ -421,17 +421,21 @@ def _bifurcation_table(ds) -> str:
                      "" if b["located"] else "  not located: somewhere in the interval"))
     value_w = max([len(f"{name} [{shown}]")] + [len(row[1]) for row in rows])
     lines.append(f"  {'bifurcation':<16} {'branch':>6} {name + ' [' + shown + ']':>{value_w}} "
-                 f"{'bracket':>9} {'2x steps':>9} {'x_max [' + _UM + ']':>11} {'power [W]':>10}")
+                 f"{'bracket':>9} {'2x steps':>9} {'steps':>7} {'x_max [' + _UM + ']':>11} "
+                 f"{'power [W]':>10}")
     for kind, value, i, note in rows:
         lines.append(f"  {kind:<16} {int(ds['branch'][i]):>6} {value:>{value_w}} "
                      f"{float(ds[name + '_precision'][i]) / scale:>9.2g} "
                      f"{float(ds[name + '_shift'][i]) / scale:>+9.2g} "
+                     f"{int(ds['steps_per_period'][i]):>7} "
                      f"{float(ds['x_max'][i]) / 1e-6:>11.5g} {float(ds['power'][i]):>10.4g}"
                      + note)
     if not rows:
         lines.append("  none located")
-    lines.append(f"  (bracket: width of the interval in {name} that holds it; 2x steps: its "
-                 "shift when solved again at twice the steps per period)")
+    lines.append(f"  (bracket: width of the interval in {name} that holds it; 2x steps: the "
+                 "change of its location when located again at twice its steps per period, "
+                 "its discretization error, not computed (nan) where not located; steps: "
+                 "the steps per period it is located at)")
     return "\n".join(lines)
 
 

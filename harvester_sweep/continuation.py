@@ -43,6 +43,7 @@ peak voltage, lam by the range), and the arclength is measured in them.
 
 from __future__ import annotations
 
+import copy
 import math
 import numbers
 import time
@@ -53,7 +54,7 @@ import numpy as np
 
 from . import period_map
 from ._engine import MAX_ORBIT_PERIOD, METRIC, NO_STOP, PARAM, STATUS
-from .accuracy import halving_error
+from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
 from .linear import linear_response
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
@@ -122,6 +123,12 @@ class ContinuationSpec:
     base : dict
         The validated parameters at ``start`` and ``steps`` (SI units): the branch's first
         point, resolved once.
+    accuracy : float
+        The error target [-] every point and every bifurcation's location is refined to
+        (the parameters' ``accuracy``); NaN where ``steps_per_period`` was given: the step
+        is then kept as given, its estimates reported.
+    max_steps : float
+        The most steps per period a refinement may take [-] (``max_steps_per_period``).
     """
 
     preset: str | None
@@ -136,6 +143,8 @@ class ContinuationSpec:
     max_points: int
     switch: bool
     base: dict
+    accuracy: float = math.nan
+    max_steps: float = math.inf
 
 
 class NoOrbitError(RuntimeError):
@@ -161,6 +170,8 @@ class _Point:
     error: float = math.nan
     tested: np.ndarray = None  # the test functions, once computed (see _Problem.tests)
     shift: float = math.nan  # parameter change at twice the steps [parameter's unit]
+    steps: int = 0  # steps per period of the orbit (the branch's, or refined: _refine)
+    located: bool = False  # a bifurcation located to LOCATE (not the end of its step)
 
 
 @dataclass
@@ -200,6 +211,12 @@ class _Problem:
 
     def lam(self, z) -> float:
         return self.lo + z[self.D] * self.range
+
+    def at(self, steps: int) -> "_Problem":
+        """The same problem at ``steps`` steps per period (the packed rows shared)."""
+        other = copy.copy(self)
+        other.steps = int(steps)
+        return other
 
     def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True):
         """P^p at z and, with ``jacobian``, the scaled [M - I, dP/dlam]: the end state (4,),
@@ -270,7 +287,7 @@ class _Problem:
                 state = end.copy()
                 state[:self.D] = z[:self.D] * self.scale  # (the fixed point; V_imp carried)
                 return _Point(z, state, metrics, monodromy, scaled, None, period, 0,
-                              self.lam(z))
+                              self.lam(z), steps=steps)
             last = size
             carry = end
         return None
@@ -416,6 +433,8 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
     check_runnable(base)
     samples = np.linspace(ends["start"], ends["stop"], STEP_SAMPLES)
     steps = fixed.get("steps_per_period")
+    # (an explicit step is kept as given, as a sweep's: no refinement, its estimates told)
+    accuracy = base["accuracy"] if steps is None else math.nan
     if steps is None:
         steps = max(auto_steps_per_period(resolve_parameters(preset, **fixed,
                                                              **{parameter: float(v)}))
@@ -430,7 +449,8 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
         parameter=parameter, start=ends["start"], stop=ends["stop"], steps=int(steps),
         step=float(step), min_step=float(min_step), max_step=float(max_step),
         max_points=int(max_points), switch=period_doubling == "switch",
-        base=at_steps[0])  # (samples[0] is start itself)
+        base=at_steps[0],  # (samples[0] is start itself)
+        accuracy=float(accuracy), max_steps=float(base["max_steps_per_period"]))
 
 
 def _continue(spec: ContinuationSpec) -> Branch:
@@ -491,8 +511,8 @@ def _continue(spec: ContinuationSpec) -> Branch:
                     doubled = _doubled(problem, point, step)
                     if doubled is not None:
                         queue.append((doubled, len(out.stops) + len(queue)))
-    for point in out.points:
-        _estimate(problem, point)
+    out.points = [_accurate(problem, point, spec.accuracy, spec.max_steps)
+                  for point in out.points]
     out.run_time = time.perf_counter() - began
     return out
 
@@ -626,6 +646,7 @@ def _locate(problem: _Problem, a: _Point, b: _Point, ds: float, test, fa: float,
     if best is None:
         return None
     best[1].precision = problem.range * (hi[0] - lo[0])
+    best[1].located = True
     return best
 
 
@@ -651,14 +672,172 @@ def _estimate(problem: _Problem, point: _Point) -> None:
     may not exist there), normal to the branch; normal to the branch also for the change
     of the parameter (at a fold, the fold's shift)."""
     normal = problem.correct(point.z, point.tangent, point.period, point.state,
-                             steps=2 * problem.steps, fixed=point.jacobian)
+                             steps=2 * point.steps, fixed=point.jacobian)
     if normal is not None:
         point.shift = problem.lam(normal.z) - problem.lam(point.z)
     fine = problem.correct(point.z, np.eye(problem.D + 1)[problem.D], point.period,
-                           point.state, steps=2 * problem.steps, fixed=point.jacobian)
+                           point.state, steps=2 * point.steps, fixed=point.jacobian)
     fine = normal if fine is None else fine
     if fine is not None:
         point.error = float(halving_error(point.metrics, fine.metrics))
+
+
+def _next_steps(steps: int, error: float, target: float, coarser, refine: int) -> int:
+    """Steps per period of the next refinement of an estimate ``error`` [-] at ``steps``
+    towards ``target`` [-] (accuracy.refined_steps, as for a sweep point: the fourth
+    order's ask, or twice the steps after a refinement that gained less than SLOW_ORDER;
+    ``coarser`` the steps and estimate before, ``refine`` the refinements so far)."""
+    want = refined_steps(np.array([float(steps)]), np.array([error]), np.array([target]),
+                         np.array([coarser], dtype=float), np.array([refine]))[0]
+    return int(max(want, steps + STEPS_QUANTUM))
+
+
+def _accurate(problem: _Problem, point: _Point, accuracy: float, max_steps: float) -> _Point:
+    """``point`` with its error estimate, refined where it is above ``accuracy`` [-]: a
+    located bifurcation by :func:`_accurate_bifurcation`, any other by
+    :func:`_accurate_point`."""
+    if point.bifurcation and point.located:
+        return _accurate_bifurcation(problem, point, accuracy, max_steps)
+    point = _accurate_point(problem, point, accuracy, max_steps)
+    if point.bifurcation:  # (not located: no location whose change could be told)
+        point.shift = math.nan
+    return point
+
+
+def _accurate_point(problem: _Problem, point: _Point, accuracy: float,
+                    max_steps: float) -> _Point:
+    """``point`` with its error estimate (:func:`_estimate`), solved again while the
+    estimate is above ``accuracy`` at the step the fourth order asks for, as a sweep point
+    (up to REFINEMENTS times, within ``max_steps`` steps per period): the branch is
+    followed at one step, and a point whose estimate asks for a finer one is re-solved at
+    it alone (:func:`_resolve`). A refinement that fails keeps the point it had."""
+    _estimate(problem, point)
+    coarser, refine = (math.nan, math.nan), 0
+    while math.isfinite(accuracy) and point.error > accuracy and refine < REFINEMENTS:
+        steps = _next_steps(point.steps, point.error, accuracy, coarser, refine)
+        if steps > max_steps:
+            break
+        finer = _resolve(problem, point, steps)
+        if finer is None:
+            break
+        _estimate(problem, finer)
+        if not math.isfinite(finer.error):
+            break
+        coarser, refine = (point.steps, point.error), refine + 1
+        point = finer
+    return point
+
+
+def _resolve(problem: _Problem, point: _Point, steps: int):
+    """``point`` solved again at ``steps`` steps per period: at its own parameter value,
+    or, where that does not converge (near a fold the orbit may not exist there), normal
+    to the branch; quasi-Newton with its Jacobian, then one run with copies for the
+    monodromy at the new step (the multipliers and test functions of the map reported).
+    None where neither converges."""
+    for constraint in (np.eye(problem.D + 1)[problem.D], point.tangent):
+        finer = problem.correct(point.z, constraint, point.period, point.state, steps=steps,
+                                fixed=point.jacobian)
+        if finer is None:
+            continue
+        out = problem.evaluate(finer.z, point.period, finer.state, steps)
+        if out is None:
+            continue
+        _, finer.metrics, finer.monodromy, finer.jacobian = out
+        finer.tangent = problem.tangent(finer.jacobian, point.tangent)
+        finer.branch, finer.arclength = point.branch, point.arclength
+        finer.bifurcation, finer.precision = point.bifurcation, point.precision
+        return finer
+    return None
+
+
+#: A bifurcation located again at another step is bracketed along its tangent at
+#: +-RELOCATE_WIDTH (scaled arclength) from where it was, the bracket widened by
+#: RELOCATE_GROWTH up to RELOCATE_TRIES times until its test function changes sign [-].
+RELOCATE_WIDTH = 1e-5
+RELOCATE_GROWTH = 8.0
+RELOCATE_TRIES = 5
+
+
+def _accurate_bifurcation(problem: _Problem, point: _Point, accuracy: float,
+                          max_steps: float) -> _Point:
+    """The located bifurcation ``point`` located again at twice its steps per period: the
+    change of its parameter value is its ``shift``, its location's discretization error
+    (fold, period doubling, Neimark-Sacker and grazing alike). While that shift is above
+    ``accuracy`` relative to the value (to the range where the value is 0), the
+    bifurcation is located again at the step the fourth order asks for, and at twice that
+    (up to REFINEMENTS times, within ``max_steps``), and so while the point's own error
+    estimate (:func:`_estimate`, normal to the branch where the orbit at its value does
+    not converge) is above it. The point returned is the location at the finest step
+    whose twice-the-steps location was found. ``shift`` is NaN where no location at twice
+    the steps was found."""
+    k = _which_test(problem, point)
+    scale = abs(point.lam) or problem.range
+    coarser, refine = (math.nan, math.nan), 0
+    fine = _relocate(problem, point, k, 2 * point.steps)
+    _estimate(problem, point)
+    while fine is not None:
+        # (the point is a point of the branch too: its own estimate counts)
+        error = max(abs(fine.lam - point.lam) / scale, point.error)
+        if not (math.isfinite(accuracy) and error > accuracy and refine < REFINEMENTS):
+            break
+        steps = _next_steps(point.steps, error, accuracy, coarser, refine)
+        if 2 * steps > max_steps:
+            break
+        finer = _relocate(problem, fine, k, steps)  # (from the nearer location)
+        finer_fine = None if finer is None else _relocate(problem, finer, k, 2 * steps)
+        if finer_fine is None:
+            break
+        coarser, refine = (point.steps, error), refine + 1
+        point, fine = finer, finer_fine
+        _estimate(problem, point)
+    point.shift = math.nan if fine is None else fine.lam - point.lam
+    return point
+
+
+def _which_test(problem: _Problem, point: _Point) -> int:
+    """The index in TESTED of the test function that located ``point``'s bifurcation (of
+    the two grazings, the stop whose test is nearer 0 there)."""
+    kind = list(BIFURCATIONS)[point.bifurcation]
+    tests = problem.tests(point)
+    candidates = [k for k, name in enumerate(TESTED) if name == kind]
+    return min(candidates, key=lambda k: abs(tests[k]) if np.isfinite(tests[k]) else math.inf)
+
+
+def _relocate(problem: _Problem, point: _Point, k: int, steps: int):
+    """The bifurcation of test function ``k`` located at ``point`` (at its own step),
+    located again at ``steps`` steps per period: bracketed along the point's tangent
+    (RELOCATE_WIDTH, widened until test ``k`` changes sign) and located by
+    :func:`_locate` on the map at ``steps``. None where no bracket or correction is
+    found."""
+    fine = problem.at(steps)
+    t = point.tangent
+    w = RELOCATE_WIDTH
+    for _ in range(RELOCATE_TRIES):
+        ends = []
+        for side in (-1.0, 1.0):
+            end = fine.correct(point.z + side * w * t, t, point.period, point.state)
+            if end is None:
+                break
+            end.tangent = fine.tangent(end.jacobian, t)
+            end.branch = point.branch
+            ends.append(end)
+        if len(ends) < 2:
+            return None
+        fa, fb = fine.tests(ends[0])[k], fine.tests(ends[1])[k]
+        if fa * fb < 0:
+            # (from the bracket's start along the point's tangent, as between two points
+            # of the branch)
+            origin = replace(ends[0], z=point.z - w * t, tangent=t)
+            found = _locate(fine, origin, ends[1], 2 * w, lambda pt: fine.tests(pt)[k],
+                            fa, fb)
+            if found is None:
+                return None
+            located = found[1]
+            located.bifurcation, located.branch = point.bifurcation, point.branch
+            located.arclength = point.arclength
+            return located
+        w *= RELOCATE_GROWTH
+    return None
 
 
 __all__ = ["Branch", "ContinuationSpec", "NoOrbitError", "check_continuation",

@@ -181,7 +181,8 @@ def branch_dataset(branch, spec) -> xr.Dataset:
     continued parameter (named after it, in its unit), the engine's metrics but
     ``status`` and ``periods_run``, ``error_estimate``, the Floquet multipliers and
     ``spectral_radius``, ``stable``, ``bifurcation`` (CF flags), ``branch``,
-    ``arclength`` and the orbit's state at forcing phase 0; global attributes: the fixed
+    ``arclength``, ``steps_per_period`` (each point's: refined where its estimate asked)
+    and the orbit's state at forcing phase 0; global attributes: the fixed
     parameters with their units, the continuation's range and options, why each branch
     ended and the run time [s].
     """
@@ -210,22 +211,27 @@ def branch_dataset(branch, spec) -> xr.Dataset:
         if name not in ("status", "periods_run"):
             values[name] = metrics[:, k]
     values["orbit_period"] = np.array([pt.period for pt in points])
+    values["steps_per_period"] = np.array([pt.steps for pt in points])
     data = {parameter: ("point", lam, {"units": PARAMETERS[parameter].unit,
                                        "long_name": PARAMETERS[parameter].description})}
     for name, value in values.items():
         output = OUTPUTS[name]
         attrs = output.attrs
         if name == "error_estimate":
-            attrs = {**attrs, "comment": "the point corrected again at twice the steps per "
+            attrs = {**attrs, "comment": "the point corrected again at twice its steps per "
                                          "period at the same parameter value (near a fold, "
-                                         "normal to the branch); " + output.comment}
+                                         "normal to the branch); a point above the accuracy "
+                                         "target is solved again at a finer step "
+                                         "(steps_per_period); " + output.comment}
         data[name] = (("point",) + output.dims, value.astype(output.dtype), attrs)
     shift = np.array([pt.shift for pt in points])
     data[f"{parameter}_shift"] = ("point", shift, {
         "units": PARAMETERS[parameter].unit,
-        "long_name": f"change of {parameter} when the point is corrected again at twice the "
-                     "steps per period: at a fold, the shift of the fold",
-        "comment": "NaN where the correction at twice the steps did not converge"})
+        "long_name": f"change of {parameter} when the point is solved again at twice its "
+                     "steps per period: at a located bifurcation, the change of its location "
+                     "(its discretization error); elsewhere, corrected normal to the branch",
+        "comment": "NaN where the correction or location at twice the steps did not "
+                   "converge"})
     data[f"{parameter}_precision"] = ("point", np.array([pt.precision for pt in points]), {
         "units": PARAMETERS[parameter].unit,
         "long_name": f"width of the bracket that locates a bifurcation in {parameter} "
