@@ -1,0 +1,571 @@
+"""The modal engine: any linear system with Hertz contact surfaces, integrated exactly
+between contacts and by RK4 in the frame of the linear flow inside them.
+
+A model in the form ``y' = M y + f A sin(w t) + sum_s b_s F_s`` (``models.beam``) comes
+in the eigen-coordinates of M relative to the linear steady state ``y_p(t)``:
+``y = y_p(t) + Re(W z)``, ``z' = lam z + sum_s inp_s F_s``. Out of contact the flow is
+exact: ``z(t + tau) = exp(lam tau) z``, one complex product per component whatever the
+modes' frequencies, so the fifth bending mode and the rod's modes (tens of kHz and
+beyond) cost no step. A grid of ``steps`` per forcing period looks for contact: each
+surface's penetration and rate are exact at the grid's ends, a maximum of the
+penetration inside a step is found exactly (Newton on its rate), and a touch is located
+on the exact flow. In contact the force enters through one vector per surface, and the
+step is the integrating-factor RK4 (Lawson): RK4 on ``exp(-lam t) z``, exact for the
+linear part, so that its stability and error come from the contact alone. Its sub-steps
+grow from ``substep / 2^GRADES`` after a touch (the force starts as ``delta^1.5``), are
+cut to land on the period's end, and the switch that ends the force (separation, or the
+clip of the damping law) is located inside the sub-step by the Hermite interpolant of
+the switching function and secant steps of the RK4 sub-step itself.
+
+The period map is this integrator's own: a point's state at each forcing period's end,
+every switch located by the same rules, so a settled orbit is a fixed point of it.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ...jit import JIT
+from ...models import hertz
+from .. import hermite
+from .layout import HEAD, complex_fields, real_fields
+
+#: Sub-steps after a touch start at substep / 2^GRADES and double up to substep: the
+#: force grows as delta^1.5 from the touch, which RK4 integrates to its order only on
+#: steps that shrink towards it [-].
+GRADES = 4
+#: Strobes kept for the settle test, and the longest orbit it looks for [periods].
+SAMPLES = 16
+MAX_ORBIT = 8
+#: A period-p match is a longer orbit only where no divisor of p repeats within NEAR times
+#: the settle tolerance [-].
+NEAR = 1e3
+#: Iterations of a switch's Newton search on the exact flow (safeguarded by bisection: it
+#: ends when the bracket is a few rounding units) [-].
+SEARCH = 80
+#: Secant steps of a contact sub-step onto the switch that ends it [-].
+SECANT = 3
+#: Outcome codes, as the lane engine's STATUS.
+SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
+#: Kinds of switch that turn a surface's force on or off.
+TOUCH, CLIP = hertz.TOUCH, hertz.CLIP
+_NH = len(HEAD)
+_IMPACTS, _APPROACH, _FORCE, _POWER = (HEAD.impacts, HEAD.approach_velocity,
+                                       HEAD.contact_force, HEAD.power)
+
+
+@njit(inline="always", **JIT)
+def _dot_re(a, s, z, D):
+    """Re(sum_k a[s, k] z[k])."""
+    acc = 0.0
+    for k in range(D):
+        acc += a[s, k].real * z[k].real - a[s, k].imag * z[k].imag
+    return acc
+
+
+@njit(inline="always", **JIT)
+def _phasor(p, sn, cs):
+    """Im(p exp(i w t)) at sin(w t) = sn, cos(w t) = cs."""
+    return p.real * sn + p.imag * cs
+
+
+@njit(**JIT)
+def _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S):
+    """Each surface's force F[s] [N] at (z, t)."""
+    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    for s in range(S):
+        d = _dot_re(pen, s, z, D) + _phasor(pen_p[s], sn, cs) - gap[s]
+        r = _dot_re(pl, s, z, D) + omega * _phasor(pen_p[s], cs, -sn)
+        F[s] = hertz.force(kh[s], d, r, ch[s])
+
+
+@njit(**JIT)
+def _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S):
+    """Penetration [m], rate [m/s] and its rate [m/s^2] of surface s at (z, t) with the
+    forces F [N] acting."""
+    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    p = pen_p[s]
+    d = _dot_re(pen, s, z, D) + _phasor(p, sn, cs) - gap[s]
+    r = _dot_re(pl, s, z, D) + omega * _phasor(p, cs, -sn)
+    a = _dot_re(pl2, s, z, D) - omega * omega * _phasor(p, sn, cs)
+    for q in range(S):
+        a += pab[s, q] * F[q]
+    return d, r, a
+
+
+@njit(**JIT)
+def _switch(kind, s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, ch, F, D, S):
+    """A switching function of surface s and its rate at (z, t): the penetration [m]
+    (TOUCH) or the clip's 1 + c_h r [-] (CLIP); the force is on where both are > 0."""
+    d, r, a = _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S)
+    if kind == TOUCH:
+        return d, r
+    return hertz.clip(r, ch[s]), ch[s] * a
+
+
+@njit(**JIT)
+def _flow(lam, z, tau, out, D):
+    """out = exp(lam tau) z: the exact contact-free flow over tau [s]."""
+    for k in range(D):
+        out[k] = cmath.exp(lam[k] * tau) * z[k]
+
+
+@njit(**JIT)
+def _exps(lam, tau, e1, eh, D):
+    """exp(lam tau) and exp(lam tau / 2)."""
+    for k in range(D):
+        e1[k] = cmath.exp(lam[k] * tau)
+        eh[k] = cmath.exp(lam[k] * (0.5 * tau))
+
+
+@njit(**JIT)
+def _locate(kind, s, z, t0, lo, hi, omega, lam, pen, pl, pl2, pen_p, pab, gap, ch, zero,
+            buf, D, S):
+    """The first tau in (lo, hi] [s] where switching function ``kind`` of surface s
+    (<= 0 at lo, > 0 at hi) crosses zero along the contact-free flow from z at t0:
+    Newton safeguarded by bisection, ending on the side where it is > 0."""
+    tau = hi
+    for _ in range(SEARCH):
+        _flow(lam, z, tau, buf, D)
+        f, df = _switch(kind, s, buf, t0 + tau, omega, pen, pl, pl2, pen_p, pab, gap, ch,
+                        zero, D, S)
+        if f > 0.0:
+            hi = tau
+        else:
+            lo = tau
+        if hi - lo <= 4e-16 * (abs(t0) + hi):
+            break
+        nxt = tau - f / df if df != 0.0 else 0.5 * (lo + hi)
+        if not (lo < nxt < hi):
+            nxt = 0.5 * (lo + hi)
+        tau = nxt
+    return hi
+
+
+@njit(**JIT)
+def _peak(s, z, t0, lo, hi, omega, lam, pen, pl, pl2, pen_p, pab, gap, zero, buf, D, S):
+    """Where the penetration of surface s, rising at lo and falling at hi, is largest
+    along the contact-free flow from z at t0, and its value: (tau [s], delta [m])."""
+    for _ in range(SEARCH):
+        tau = 0.5 * (lo + hi)
+        _flow(lam, z, tau, buf, D)
+        d, r, a = _surface(s, buf, t0 + tau, omega, pen, pl, pl2, pen_p, pab, gap, zero, D, S)
+        if r > 0.0:
+            lo = tau
+        else:
+            hi = tau
+        nxt = tau - r / a if a < 0.0 else tau
+        if lo < nxt < hi:  # a Newton step inside the bracket: take it, then bisect again
+            _flow(lam, z, nxt, buf, D)
+            d2, r2, a2 = _surface(s, buf, t0 + nxt, omega, pen, pl, pl2, pen_p, pab, gap,
+                                  zero, D, S)
+            if r2 > 0.0:
+                lo = nxt
+            else:
+                hi = nxt
+            if abs(r2) * (hi - lo) <= 1e-15 * abs(d2) + 1e-300 or hi - lo <= 4e-16 * hi:
+                return nxt, d2
+        if hi - lo <= 4e-16 * (abs(t0) + hi):
+            break
+    _flow(lam, z, hi, buf, D)
+    d, r, a = _surface(s, buf, t0 + hi, omega, pen, pl, pl2, pen_p, pab, gap, zero, D, S)
+    return hi, d
+
+
+@njit(**JIT)
+def _lawson(z, t, tau, e1, eh, out, omega, pen, pl, pen_p, inp, gap, kh, ch, F, w2, w3, w4,
+            D, S):
+    """One integrating-factor RK4 step of length tau [s] from z at t into out (e1, eh:
+    exp(lam tau), exp(lam tau / 2)); F holds the forces [N] at the step's end."""
+    hh, h6 = 0.5 * tau, tau / 6.0
+    _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+    f1 = F.copy()
+    for k in range(D):
+        g = 0j
+        for s in range(S):
+            g += inp[s, k] * f1[s]
+        w2[k] = eh[k] * (z[k] + hh * g)
+        out[k] = e1[k] * (z[k] + h6 * g)
+    _forces(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+    f2 = F.copy()
+    for k in range(D):
+        g = 0j
+        for s in range(S):
+            g += inp[s, k] * f2[s]
+        w3[k] = eh[k] * z[k] + hh * g
+    _forces(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+    f3 = F.copy()
+    for k in range(D):
+        g2, g3 = 0j, 0j
+        for s in range(S):
+            g2 += inp[s, k] * f2[s]
+            g3 += inp[s, k] * f3[s]
+        w4[k] = e1[k] * z[k] + tau * eh[k] * g3
+        out[k] += 2.0 * h6 * eh[k] * (g2 + g3)
+    _forces(w4, t + tau, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+    for k in range(D):
+        g = 0j
+        for s in range(S):
+            g += inp[s, k] * F[s]
+        out[k] += h6 * g
+    _forces(out, t + tau, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+
+
+@njit(**JIT)
+def _lag(y, ring, n, p, scale, D):
+    """The largest difference between strobe y (period n) and the strobe p periods before
+    it in the ring, in units of each component's scale."""
+    worst = 0.0
+    for a in range(D):
+        worst = max(worst, abs(y[a] - ring[(n - p) % SAMPLES, a]) / scale[a])
+    return worst
+
+
+@njit(**JIT)
+def _sample(z, t, t_abs, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega, pen, pl, pl2,
+            pen_p, pab, gap, kh, ch, out, outl, out_p, out_f, volt, D, S, K):
+    """A sample of the motion at (z, t [s] in the period; t_abs [s] from the start):
+    ``book``: the outputs' extrema (with the Hermite interpolant's inside the interval
+    since the previous sample, ``prev``, o_prev, do_prev: updated), int V^2 dt, the force's
+    peak; ``nrec`` >= 0: a row of ``rec``. Returns the next row of ``rec``."""
+    _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    Fsum, dFsum = 0.0, 0.0
+    for s in range(S):
+        Fsum += F[s]
+        if F[s] > 0.0:
+            d, r, a = _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S)
+            # dF/dt of the law k d^1.5 (1 + c r): the rate the peak's Hermite interpolant
+            # needs
+            sq = math.sqrt(d)
+            dFsum += kh[s] * (1.5 * sq * r * hertz.clip(r, ch[s]) + d * sq * ch[s] * a)
+    hs = t - prev[0]
+    inside = book and hs > 0.0
+    for o in range(K):
+        oo = _dot_re(out, o, z, D) + _phasor(out_p[o], sn, cs)
+        do = _dot_re(outl, o, z, D) + omega * _phasor(out_p[o], cs, -sn)
+        for s in range(S):
+            do += out_f[o, s] * F[s]
+        if book:
+            if inside and do_prev[o] * do <= 0.0:
+                e = hermite.extremum(o_prev[o], do_prev[o], oo, do, hs)
+                acc[_NH + o] = max(acc[_NH + o], e)
+                acc[_NH + K + o] = min(acc[_NH + K + o], e)
+            if inside and o == volt:
+                acc[_POWER] += hermite.v2_integral(o_prev[o], do_prev[o], oo, do, 0.5 * hs,
+                                                   hs * hs / 6.0)
+            acc[_NH + o] = max(acc[_NH + o], oo)
+            acc[_NH + K + o] = min(acc[_NH + K + o], oo)
+        if 0 <= nrec < rec.shape[0]:
+            rec[nrec, 1 + S + o] = oo
+        o_prev[o], do_prev[o] = oo, do
+    if book:
+        if inside and prev[2] > 0.0 > dFsum:
+            acc[_FORCE] = max(acc[_FORCE], hermite.extremum(prev[1], prev[2], Fsum, dFsum, hs))
+        acc[_FORCE] = max(acc[_FORCE], Fsum)
+    prev[0], prev[1], prev[2] = t, Fsum, dFsum
+    if 0 <= nrec < rec.shape[0]:
+        rec[nrec, 0] = t_abs
+        for s in range(S):
+            rec[nrec, 1 + s] = F[s]
+        nrec += 1
+    return nrec
+
+
+@njit(**JIT)
+def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, grid, pen, pl, pl2,
+             pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, volt, strobe, y_p,
+             scale, settle, limit, ring, acc, D, S, K):
+    """Run ``periods`` forcing periods from z (modified) in the contact state ``st`` =
+    (mode, surface, grade, periods run before) (modified), at ``steps`` grid steps per
+    period T [s].
+
+    ``settle`` > 0: stop at the first period whose strobe repeats one of the last
+    MAX_ORBIT within ``settle`` times each component's scale. ``book``: accumulate into
+    ``acc`` (the head's sums, then K maxima, K minima). ``nrec`` >= 0: record each sample
+    into ``rec`` (time, forces, outputs) from row nrec on. Returns (orbit period p, 0 for
+    none; status; periods run; rows recorded)."""
+    h = T / steps
+    F = np.zeros(S)
+    zero = np.zeros(S)
+    buf, zn = np.empty(D, np.complex128), np.empty(D, np.complex128)
+    w2, w3, w4 = (np.empty(D, np.complex128), np.empty(D, np.complex128),
+                  np.empty(D, np.complex128))
+    e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
+    sub1 = np.empty((GRADES + 1, D), np.complex128)
+    subh = np.empty((GRADES + 1, D), np.complex128)
+    for g in range(GRADES + 1):
+        _exps(lam, substep * 0.5 ** (GRADES - g), e1, eh, D)
+        sub1[g], subh[g] = e1, eh
+    o_prev = np.empty(K)
+    do_prev = np.empty(K)
+    y = np.empty(D)
+    prev = np.zeros(3)  # the last sample's time [s], force [N] and its rate [N/s]
+    mode, act, grade = st[0], st[1], st[2]
+    override = -1  # the kind of switch just crossed off (its function counts as <= 0)
+    status, p_found, run = SETTLED, 0, 0
+    if book or nrec >= 0:  # the start is the first sample
+        nrec = _sample(z, 0.0, st[3] * T, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega,
+                       pen, pl, pl2, pen_p, pab, gap, kh, ch, out, outl, out_p, out_f, volt, D, S,
+                       K)
+    for period in range(periods):
+        t, j, on_grid = 0.0, 0, True
+        while True:
+            sample = False
+            if mode == 0:  # ---- contact-free: exact flow to the next grid time
+                jn = j + 1 if on_grid else int(t / h) + 1
+                target = T if jn >= steps else jn * h
+                tau = target - t
+                if on_grid:
+                    for k in range(D):
+                        zn[k] = grid[k] * z[k]
+                else:
+                    _flow(lam, z, tau, zn, D)
+                best, bkind, bs = tau, 0, -1
+                for s in range(S):
+                    d0, r0, a0 = _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
+                                          D, S)
+                    d1, r1, a1 = _surface(s, zn, target, omega, pen, pl, pl2, pen_p, pab, gap,
+                                          zero, D, S)
+                    c0, c1 = hertz.clip(r0, ch[s]), hertz.clip(r1, ch[s])
+                    if override == TOUCH:
+                        d0 = min(d0, 0.0)
+                    elif override == CLIP:
+                        c0 = min(c0, 0.0)
+                    if d1 > 0.0 and c1 > 0.0:
+                        kind = TOUCH if d0 <= 0.0 else CLIP
+                        found = _locate(kind, s, z, t, 0.0, tau, omega, lam, pen, pl, pl2,
+                                        pen_p, pab, gap, ch, zero, buf, D, S)
+                        if found < best or bs < 0:
+                            best, bkind, bs = found, kind, s
+                    elif d0 <= 0.0 and d1 <= 0.0 and r0 > 0.0 and r1 < 0.0:
+                        tm, dm = _peak(s, z, t, 0.0, tau, omega, lam, pen, pl, pl2, pen_p, pab,
+                                       gap, zero, buf, D, S)
+                        if dm > 0.0:
+                            found = _locate(TOUCH, s, z, t, 0.0, tm, omega, lam, pen, pl,
+                                            pl2, pen_p, pab, gap, ch, zero, buf, D, S)
+                            if found < best or bs < 0:
+                                best, bkind, bs = found, TOUCH, s
+                override = -1
+                if bs >= 0:
+                    _flow(lam, z, best, zn, D)
+                    z[:] = zn
+                    t += best
+                    on_grid = False
+                    mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
+                    if book and bkind == TOUCH:
+                        d, r, a = _surface(bs, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
+                                           D, S)
+                        acc[_IMPACTS] += 1.0
+                        acc[_APPROACH] = max(acc[_APPROACH], r)
+                    sample = True
+                else:
+                    z[:] = zn
+                    t, j, on_grid = target, jn, True
+                    sample = True
+            else:  # ---- in contact: RK4 sub-steps in the frame of the flow
+                tau = substep * 0.5 ** (GRADES - grade)
+                last = t + tau >= T * (1.0 - 1e-14)
+                if last:
+                    tau = T - t
+                    _exps(lam, tau, e1, eh, D)
+                    _lawson(z, t, tau, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
+                            w2, w3, w4, D, S)
+                else:
+                    _lawson(z, t, tau, sub1[grade], subh[grade], zn, omega, pen, pl, pen_p, inp,
+                            gap, kh, ch, F, w2, w3, w4, D, S)
+                d1, r1, a1 = _surface(act, zn, t + tau, omega, pen, pl, pl2, pen_p, pab, gap, F,
+                                      D, S)
+                c1 = hertz.clip(r1, ch[act])
+                if d1 > 0.0 and c1 > 0.0:
+                    z[:] = zn
+                    t += tau
+                    grade = min(grade + 1, GRADES)
+                    sample = True
+                else:
+                    kind = TOUCH if d1 <= 0.0 else CLIP
+                    _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+                    f0, df0 = _switch(kind, act, z, t, omega, pen, pl, pl2, pen_p, pab, gap, ch,
+                                      F, D, S)
+                    _forces(zn, t + tau, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+                    f1, df1 = _switch(kind, act, zn, t + tau, omega, pen, pl, pl2, pen_p, pab,
+                                      gap, ch, F, D, S)
+                    lo, hi, flo, fhi = 0.0, tau, f0, f1
+                    ts = tau * hermite.root(f0, df0, f1, df1, tau, 0.0)
+                    for _ in range(SECANT):
+                        if not (lo < ts < hi):
+                            ts = 0.5 * (lo + hi)
+                        _exps(lam, ts, e1, eh, D)
+                        _lawson(z, t, ts, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
+                                w2, w3, w4, D, S)
+                        fs, dfs = _switch(kind, act, zn, t + ts, omega, pen, pl, pl2, pen_p, pab,
+                                          gap, ch, F, D, S)
+                        if fs > 0.0:
+                            lo, flo = ts, fs
+                        else:
+                            hi, fhi = ts, fs
+                        if fs == 0.0 or hi - lo <= 4e-16 * (t + hi):
+                            break
+                        ts = lo - flo * (hi - lo) / (fhi - flo)
+                    z[:] = zn
+                    t += ts
+                    last = False
+                    mode, override = 0, kind
+                    on_grid = False
+                    sample = True
+                if last:
+                    t = T
+            if sample and (book or nrec >= 0):
+                nrec = _sample(z, t, (st[3] + period) * T + t, book, acc, rec, nrec, prev,
+                               o_prev, do_prev, F, omega, pen, pl, pl2, pen_p, pab, gap, kh,
+                               ch, out, outl, out_p, out_f, volt, D, S, K)
+            if t >= T:
+                break
+        # ---- the period's end: its strobe (the next period's samples start from it)
+        prev[0] = 0.0
+        run += 1
+        for a in range(D):
+            v = y_p[a]
+            for k in range(D):
+                v += strobe[a, k].real * z[k].real - strobe[a, k].imag * z[k].imag
+            y[a] = v
+        finite = True
+        for a in range(D):
+            if not (abs(y[a]) <= limit * scale[a]):
+                finite = False
+        if not finite:
+            status = DIVERGED
+            break
+        n = st[3] + period
+        if settle > 0.0:
+            for p in range(1, min(MAX_ORBIT, n) + 1):
+                if _lag(y, ring, n, p, scale, D) <= settle:
+                    # a longer orbit only where no divisor of it nearly repeats: a transient
+                    # decaying with multipliers near -1 can match at lag 2 before lag 1
+                    for d in range(1, p):
+                        if p % d == 0 and _lag(y, ring, n, d, scale, D) <= NEAR * settle:
+                            break
+                    else:
+                        p_found = p
+                    break
+        ring[n % SAMPLES] = y
+        if p_found > 0:
+            break
+    st[0], st[1], st[2] = mode, act, grade
+    st[3] += run
+    return p_found, status, run, nrec
+
+
+
+
+@njit(**JIT)
+def _tables(c, r, D, S, K):
+    """A point's tables from its complex row c and real row r (layout.COMPLEX, REAL)."""
+    lam_o, grid_o, pen_o, inp_o, penp_o, out_o, outp_o, strobe_o, _ = complex_fields(D, S, K)
+    (_, _, _, _, _, _, _, _, gap_o, kh_o, ch_o, outf_o, scale_o, yp_o, _) = real_fields(D, S, K)
+    lam = c[lam_o:lam_o + D].copy()
+    pen = c[pen_o:pen_o + S * D].copy().reshape((S, D))
+    inp = c[inp_o:inp_o + S * D].copy().reshape((S, D))
+    out = c[out_o:out_o + K * D].copy().reshape((K, D))
+    pl, pl2 = pen * lam, pen * lam * lam
+    pab = np.empty((S, S))
+    for s in range(S):
+        for q in range(S):
+            pab[s, q] = _dot_re(pl, s, inp[q], D)
+    return (lam, c[grid_o:grid_o + D].copy(), pen, pl, pl2, c[penp_o:penp_o + S].copy(), pab,
+            inp, r[gap_o:gap_o + S].copy(), r[kh_o:kh_o + S].copy(), r[ch_o:ch_o + S].copy(),
+            out, out * lam, c[outp_o:outp_o + K].copy(),
+            r[outf_o:outf_o + K * S].copy().reshape((K, S)),
+            c[strobe_o:strobe_o + D * D].copy().reshape((D, D)), r[yp_o:yp_o + D].copy(),
+            r[scale_o:scale_o + D].copy())
+
+
+@njit(**JIT)
+def _start(z, omega, pen, pen_p, pl, gap, ch, D, S):
+    """The contact state (mode, surface, grade, periods run) of a start z at phase 0: in
+    contact where a surface pushes."""
+    st = np.zeros(4, np.int64)
+    for s in range(S):
+        d = _dot_re(pen, s, z, D) + _phasor(pen_p[s], 0.0, 1.0) - gap[s]
+        rt = _dot_re(pl, s, z, D) + omega * _phasor(pen_p[s], 1.0, 0.0)
+        if hertz.pushes(d, rt, ch[s]):
+            st[0], st[1], st[2] = 1, s, GRADES
+    return st
+
+
+@njit(**JIT)
+def run_point(c, r, z, metrics, ring, D, S, K):
+    """One point from z (its eigen-coordinates, replaced by its end) to steady state, then
+    its orbit measured: metrics (layout.HEAD, then each output's largest and smallest
+    value), ring the last SAMPLES strobes (oldest first)."""
+    (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
+     y_p, scale) = _tables(c, r, D, S, K)
+    omega, steps, substep = r[0], int(r[1]), r[2]
+    max_periods, settle, limit, R, volt = int(r[3]), r[4], r[5], r[6], int(r[7])
+    T = 2.0 * math.pi / omega
+    st = _start(z, omega, pen, pen_p, pl, gap, ch, D, S)
+    acc = np.zeros(metrics.shape[0])
+    acc[_NH:_NH + K] = -np.inf
+    acc[_NH + K:] = np.inf
+    rec = np.empty((0, 1))
+    buf = np.zeros((SAMPLES, D))
+    p, status, run, _ = _advance(z, st, max_periods, False, rec, -1, omega, T, steps, substep,
+                                 lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out,
+                                 outl, out_p, out_f, volt, strobe, y_p, scale, settle, limit,
+                                 buf, acc, D, S, K)
+    if status == SETTLED and p == 0:
+        status = NOT_SETTLED
+    periods_measured = max(p, 1)
+    if status != DIVERGED:
+        _, status2, _, _ = _advance(z, st, periods_measured, True, rec, -1, omega, T, steps,
+                                    substep, lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh,
+                                    ch, out, outl, out_p, out_f, volt, strobe, y_p, scale, 0.0,
+                                    limit, buf, acc, D, S, K)
+        if status2 == DIVERGED:
+            status = DIVERGED
+    metrics[:] = acc
+    metrics[HEAD.status] = status
+    metrics[HEAD.periods_run] = st[3]
+    metrics[HEAD.period] = p
+    metrics[_IMPACTS] = acc[_IMPACTS] / periods_measured
+    span = periods_measured * T
+    metrics[_POWER] = acc[_POWER] / (R * span)
+    metrics[HEAD.voltage_rms] = math.sqrt(acc[_POWER] / span)
+    if acc[_IMPACTS] == 0.0:
+        metrics[_APPROACH] = np.nan
+    n = st[3]
+    for k in range(SAMPLES):
+        ring[k] = buf[(n + k) % SAMPLES]
+
+
+@njit(parallel=True, **JIT)
+def run_points(crows, rrows, z, metrics, strobes, D, S, K):
+    """Every point (complex rows (n, ...), real rows (n, ...), eigen-coordinates z (n, D),
+    replaced by the end) to steady state: metrics (n, metric_size(K)), strobes
+    (n, SAMPLES, D). Each point is run alone, so its numbers do not depend on the
+    threads or the other points."""
+    for i in prange(crows.shape[0]):
+        run_point(crows[i], rrows[i], z[i], metrics[i], strobes[i], D, S, K)
+
+
+@njit(**JIT)
+def record(c, r, z, periods, rec, D, S, K):
+    """One point from z (modified) over ``periods`` forcing periods, every sample (grid
+    times, contact sub-steps, switches) into rec (rows: time [s], each surface's force
+    [N], each output); returns the rows recorded (at most len(rec))."""
+    (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
+     y_p, scale) = _tables(c, r, D, S, K)
+    omega, steps, substep = r[0], int(r[1]), r[2]
+    limit, volt = r[5], int(r[7])
+    T = 2.0 * math.pi / omega
+    st = _start(z, omega, pen, pen_p, pl, gap, ch, D, S)
+    acc = np.zeros(len(HEAD) + 2 * K)
+    buf = np.zeros((SAMPLES, D))
+    _, _, _, n = _advance(z, st, periods, False, rec, 0, omega, T, steps, substep, lam, grid,
+                          pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
+                          volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
+    return n

@@ -1,0 +1,98 @@
+"""A linear system with contact surfaces (``models.beam.LinearSystem``) packed into the
+modal engine's rows: the system in the eigen-coordinates of its linear part, relative to
+its linear steady state.
+
+The eigenvectors are taken of the balanced matrix (``scipy.linalg.matrix_balance``): a
+beam's rates are its displacements times frequencies up to 1e6 1/s, and an unbalanced
+eigenvector basis would lose those digits in every change of coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from ._engine.modal import REAL, complex_fields, real_fields
+
+#: The largest condition number of the eigenvector basis accepted: beyond it the linear
+#: part is too near a defective matrix (two equal eigenvalues sharing one eigenvector)
+#: for its eigen-coordinates to keep the state's digits [-].
+MAX_CONDITION = 1e8
+
+
+@dataclass
+class Packed:
+    """A point packed: its rows and the change of coordinates.
+
+    crow, rrow: the complex and real rows (``_engine.modal.layout``); basis W (D, D) and
+    its inverse, with y = y_p(t) + Re(W z); particular P (D,) complex, y_p(t) =
+    Im(P exp(i w t)); dims (D, S, K).
+    """
+
+    crow: np.ndarray
+    rrow: np.ndarray
+    basis: np.ndarray
+    inverse: np.ndarray
+    particular: np.ndarray
+    dims: tuple
+
+    def to_modal(self, y) -> np.ndarray:
+        """Eigen-coordinates z (D,) complex of a state y (D,) at phase 0."""
+        return self.inverse @ (np.asarray(y, dtype=float) - self.particular.imag)
+
+    def to_state(self, z) -> np.ndarray:
+        """The state y (D,) at phase 0 of eigen-coordinates z (D,)."""
+        return (self.basis @ z).real + self.particular.imag
+
+
+def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resistance, steps,
+         substep, max_periods, settle, limit, scale) -> Packed:
+    """Pack a point.
+
+    system: models.beam.LinearSystem; frequency [Hz]; amplitude A [m/s^2] of the base
+    acceleration -A sin(w t); hertz_stiffness (S,) [N/m^1.5] and contact_damping (S,)
+    [s/m] of each surface; resistance [Ohm] (the power's V^2/R); steps: grid steps per
+    forcing period; substep: the RK4 sub-step in contact [s]; max_periods: budget of
+    periods; settle: the settle tolerance relative to each component's scale (D,)
+    ``scale``; limit: the divergence limit in units of the scales.
+    """
+    M = np.asarray(system.matrix, dtype=float)
+    D, S, K = len(M), len(system.surfaces), len(system.outputs)
+    omega = 2.0 * np.pi * frequency
+    balanced, (t, _) = scipy.linalg.matrix_balance(M, permute=False, separate=True)
+    lam, vectors = np.linalg.eig(balanced)
+    if np.linalg.cond(vectors) > MAX_CONDITION:
+        raise ValueError("the linear system is too near a defective matrix for its "
+                         "eigen-coordinates (condition number of its eigenvectors "
+                         f"{np.linalg.cond(vectors):.3g} > {MAX_CONDITION:.0e})")
+    W = t[:, None] * vectors
+    Winv = np.linalg.inv(vectors) / t[None, :]
+    P = np.linalg.solve(1j * omega * np.eye(D) - M, np.asarray(system.forcing) * amplitude)
+    h = 1.0 / (frequency * steps)
+    lam_o, grid_o, pen_o, inp_o, penp_o, out_o, outp_o, strobe_o, size = complex_fields(D, S, K)
+    c = np.zeros(size, dtype=complex)
+    c[lam_o:lam_o + D] = lam
+    c[grid_o:grid_o + D] = np.exp(lam * h)
+    c[pen_o:pen_o + S * D] = (system.surfaces @ W).ravel()
+    c[inp_o:inp_o + S * D] = (Winv @ system.inputs.T).T.ravel()
+    c[penp_o:penp_o + S] = system.surfaces @ P
+    c[out_o:out_o + K * D] = (system.outputs @ W).ravel()
+    c[outp_o:outp_o + K] = system.outputs @ P
+    c[strobe_o:strobe_o + D * D] = W.ravel()
+    fields = real_fields(D, S, K)
+    r = np.zeros(fields[-1])
+    head = dict(omega=omega, steps=steps, substep=substep, max_periods=max_periods,
+                settle=settle, limit=limit, resistance=resistance,
+                volt_out=list(system.output_names).index("voltage"))
+    for k, (name, _) in enumerate(REAL[:len(head)]):
+        r[fields[k]] = head[name]
+    gap_o, kh_o, ch_o, outf_o, scale_o, yp_o = fields[8:14]
+    r[gap_o:gap_o + S] = system.gaps
+    r[kh_o:kh_o + S] = hertz_stiffness
+    r[ch_o:ch_o + S] = contact_damping
+    r[outf_o:outf_o + K * S] = (system.outputs @ system.inputs.T).ravel()
+    r[scale_o:scale_o + D] = scale
+    r[yp_o:yp_o + D] = P.imag
+    return Packed(c, r, W, Winv, P, (D, S, K))
