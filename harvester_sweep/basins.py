@@ -42,7 +42,13 @@ from .linear import linear_response
 from .models import tip_mass
 from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
-from .parameters import PRESET_NOTES, ParameterError, is_number, resolve_parameters
+from .parameters import (
+    DEFAULT_PRESET,
+    PRESET_NOTES,
+    ParameterError,
+    is_number,
+    resolve_parameters,
+)
 from .results import solve
 from .run_estimate import announce, estimate_basins
 from .sweep_file import axis, check_grid_size
@@ -68,7 +74,7 @@ ATTRACTOR_OUTPUTS = ("orbit_period", "power", "v_peak", "x_max", "x_min",
 #: basin_fractions' keywords and a basin file's omitted keys (basin_file) read them. Starts
 #: per grid point [-], the seed [-], and starts from each point's default box (no box, no
 #: shock).
-DEFAULTS = {"preset": "paper", "samples": 200, "seed": 0, "box": None, "shock": None}
+DEFAULTS = {"preset": DEFAULT_PRESET, "samples": 200, "seed": 0, "box": None, "shock": None}
 #: Starts basin_fractions draws at its one point by default [-]: one point affords more
 #: than each point of a map.
 POINT_SAMPLES = 1000
@@ -300,10 +306,10 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
         starts = {"starts": "base shock at a uniform moment of the orbit reached from rest",
                   "shock": shock, "shock_units": "m/s"}
     ds = xr.Dataset(data, coords=coords, attrs={
-        **run_attributes(fixed, PRESET_NOTES.get(preset or "paper", [])),
+        **run_attributes(fixed, PRESET_NOTES.get(preset or DEFAULT_PRESET, [])),
         "title": "harvester_sweep basins of attraction of a piezoelectric harvester with a "
                  "Hertz stop",
-        "preset": preset or "paper", "grid_axes": " ".join(axes), "samples": samples,
+        "preset": preset or DEFAULT_PRESET, "grid_axes": " ".join(axes), "samples": samples,
         "seed": seed, **starts})
     return ds
 

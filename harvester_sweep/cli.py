@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .parameters import (
+    DEFAULT_PRESET,
     PARAMETERS,
     PRESETS,
     ParameterError,
@@ -40,8 +41,9 @@ def _parser() -> argparse.ArgumentParser:
         "rest to its steady state, the periodic orbit it settles on, and print its metrics "
         "(power, voltages, x_max, contact force, Floquet multipliers, error estimate) as a "
         "table or JSON; optionally write the orbit to netCDF and draw the paper's Fig. 3.")
-    scene.add_argument("--preset", default="paper", choices=sorted(PRESETS),
-                       help="starting parameter set (default: paper, the paper's Table 1)")
+    scene.add_argument("--preset", default=DEFAULT_PRESET, choices=sorted(PRESETS),
+                       help=f"starting parameter set (default: {DEFAULT_PRESET}, the paper's "
+                       "Table 1)")
     scene.add_argument("--set", dest="assignments", action="append", default=[],
                        metavar="NAME=VALUE",
                        help="override a parameter in SI units, e.g. --set gap=2e-6 (repeatable; "

@@ -58,7 +58,14 @@ from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
 from .linear import linear_response
 from .outputs import BIFURCATIONS
 from .packing import check_runnable, pack_parameters, pack_points
-from .parameters import PARAMETERS, ParameterError, check_names, is_number, resolve_parameters
+from .parameters import (
+    DEFAULT_PRESET,
+    PARAMETERS,
+    ParameterError,
+    check_names,
+    is_number,
+    resolve_parameters,
+)
 from .period_map import CENTRAL, PERTURBATION, ROUNDING, orbit_scales, state_size
 from .results import solve
 from .timescales import auto_steps_per_period
@@ -93,7 +100,7 @@ TESTED = ("fold", "period_doubling", "neimark_sacker", "grazing", "grazing")
 #: Defaults of the options, the one place they are written: continue_branch's keywords and
 #: a continuation file's omitted keys (branch_file) read them. step, min_step and max_step
 #: are in units of the parameter's range |stop - start| [-], max_points a count [-].
-DEFAULTS = {"preset": "paper", "parameter": "frequency", "step": 0.01, "min_step": 1e-7,
+DEFAULTS = {"preset": DEFAULT_PRESET, "parameter": "frequency", "step": 0.01, "min_step": 1e-7,
             "max_step": 0.05, "max_points": 2000, "period_doubling": "mark"}
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import xarray as xr
 
 from .outputs import OUTPUTS, RUN_OUTPUTS, SCENE_OUTPUTS, SERIES, STATUS_NAMES, STROBES
-from .parameters import PARAMETERS, PRESET_NOTES, resolve_parameters
+from .parameters import DEFAULT_PRESET, PARAMETERS, PRESET_NOTES, resolve_parameters
 
 
 def multiplier_coordinate(n: int) -> dict:
@@ -243,11 +243,11 @@ def branch_dataset(branch, spec) -> xr.Dataset:
                                **{parameter: spec.start, "steps_per_period": spec.steps})
     fixed.pop(parameter)
     ds = xr.Dataset(data, coords=coords)
-    ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec.preset or "paper", [])))
+    ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec.preset or DEFAULT_PRESET, [])))
     ds.attrs.update({
         "title": "harvester_sweep branch of periodic orbits of a piezoelectric harvester with "
                  "a Hertz stop",
-        "preset": spec.preset or "paper",
+        "preset": spec.preset or DEFAULT_PRESET,
         "continued_parameter": parameter,
         "start": spec.start, "stop": spec.stop,
         "range_units": PARAMETERS[parameter].unit,

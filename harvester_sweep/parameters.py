@@ -255,6 +255,10 @@ _TABLE_1 = dict(
 _D33 = 190e-12  # m/V, Table 1
 _K_TABLE_1 = _TABLE_1["mass"] * (2 * math.pi * _TABLE_1["natural_frequency"]) ** 2
 
+#: The preset a scene, sweep, branch or basin map starts from when none is named (and the
+#: one ``preset=None`` means): the paper's Table 1.
+DEFAULT_PRESET = "paper"
+
 PRESETS: dict[str, Mapping] = {  # (read-only: a preset's checked values are kept)
     "paper": MappingProxyType(dict(_TABLE_1, coupling=_K_TABLE_1 * _D33)),
     "strong_coupling": MappingProxyType(dict(_TABLE_1, coupling=3e-3)),
@@ -275,13 +279,13 @@ PRESET_NOTES: dict[str, list[str]] = {
 }
 
 
-def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
+def resolve_parameters(preset: str | None = DEFAULT_PRESET, **overrides) -> dict:
     """Return the full, validated parameter set: a preset updated with ``overrides``.
 
     Parameters
     ----------
     preset : str or None
-        Name of a preset in :data:`PRESETS`; ``None`` starts from the paper's values.
+        Name of a preset in :data:`PRESETS`; ``None`` is :data:`DEFAULT_PRESET`.
     **overrides
         Parameter values by name, in the SI units of :data:`PARAMETERS`.
 
@@ -296,7 +300,7 @@ def resolve_parameters(preset: str | None = "paper", **overrides) -> dict:
         raise ParameterError(
             f"preset {value_text(preset)} is unknown: must be one of {', '.join(PRESETS)}")
     check_names(overrides)
-    checked = dict(_checked_preset(preset or "paper"))
+    checked = dict(_checked_preset(preset or DEFAULT_PRESET))
     for name, value in overrides.items():
         checked[name] = _check(name, value)
     moving = checked["stop_support_stiffness"] is not None

@@ -38,6 +38,7 @@ import numpy as np
 from ._engine import SOURCE_DIGEST
 from .outputs import ENGINE_METRICS
 from .parameters import (
+    DEFAULT_PRESET,
     PARAMETERS,
     ParameterError,
     check_names,
@@ -240,7 +241,7 @@ def load_sweep(source) -> SweepSpec:
     if isinstance(source, SweepSpec):
         return source
     source = read_toml(source, "sweep", _TOP_KEYS)
-    preset = source.get("preset", "paper")
+    preset = source.get("preset", DEFAULT_PRESET)
     fixed = dict(table(source, "parameters"))
     check_names(fixed)  # (before the call: `preset` among them would be a TypeError)
     base = resolve_parameters(preset, **fixed)  # bad values, named
