@@ -189,15 +189,17 @@ def _announce_compilation() -> None:
 
 
 def _scene(args) -> int:
-    from .scene import run_scene
+    from .scene import check_scene, run_scene
 
     overrides = dict(parse_assignment(text) for text in args.assignments)
     for path, suffixes in ((args.plot, _FIGURES), (args.output, (".nc",))):
         if path is not None:
             _check_output(path, suffixes)
-    resolve_parameters(args.preset, **overrides)  # bad input: one line, before anything else
+    # (checked once, before anything else: bad input or a too stiff point is one line; the
+    # scene takes the checked values as they are)
+    spec = check_scene(args.preset, **overrides)
     _announce_compilation()
-    result = run_scene(args.preset, **overrides)
+    result = run_scene(spec)
     metrics = result.metrics
     if args.json:
         print(json.dumps(metrics))

@@ -9,8 +9,40 @@ import numpy as np
 
 from . import period_map
 from .packing import check_runnable, pack_parameters, pack_points
-from .parameters import PRESET_NOTES, resolve_parameters
+from .parameters import DEFAULT_PRESET, PRESET_NOTES, ParameterError, resolve_parameters
 from .results import solve
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """A checked scene (:func:`check_scene`), which :func:`run_scene` takes as it is.
+
+    Attributes
+    ----------
+    preset : str or None
+        The preset the parameters start from (``None``: ``DEFAULT_PRESET``).
+    parameters : dict
+        The full, validated parameter set (SI units, see ``PARAMETERS``), runnable (not
+        too stiff).
+    """
+
+    preset: str | None
+    parameters: dict
+
+
+def check_scene(preset: str | None = DEFAULT_PRESET, **parameters) -> SceneSpec:
+    """Check a scene's input once: the preset with ``parameters`` (SI units) resolved, and
+    the point refused if too stiff.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown name or a value out of range; TooStiffError for a point whose step
+        would exceed max_steps_per_period.
+    """
+    values = resolve_parameters(preset, **parameters)
+    check_runnable(values)  # too stiff: refused before integration
+    return SceneSpec(preset, values)
 
 
 @dataclass
@@ -81,13 +113,15 @@ class SceneResult:
         return plot_scene(self.dataset(periods), path)
 
 
-def run_scene(preset: str | None = "paper", **parameters) -> SceneResult:
+def run_scene(preset: str | SceneSpec | None = DEFAULT_PRESET, **parameters) -> SceneResult:
     """Run one scene to steady state.
 
     Parameters
     ----------
-    preset : str or None
-        A preset name (``"paper"``, ``"strong_coupling"``); ``None`` is the paper's.
+    preset : str, SceneSpec or None
+        A preset name (``"paper"``, ``"strong_coupling"``); ``None`` is
+        ``DEFAULT_PRESET``, the paper's. Or a scene already checked (:func:`check_scene`),
+        taken as it is, with no other argument.
     **parameters
         Overrides by name in SI units, e.g. ``gap=2e-6`` [m], ``resistance=1e5`` [Ohm].
 
@@ -101,10 +135,17 @@ def run_scene(preset: str | None = "paper", **parameters) -> SceneResult:
         Before any integration, for an unknown name or a value out of range; TooStiffError
         for a point whose step would exceed max_steps_per_period.
     """
-    values = resolve_parameters(preset, **parameters)
-    check_runnable(values)  # too stiff: refused before integration
+    if not isinstance(preset, SceneSpec):
+        spec = check_scene(preset, **parameters)
+    elif parameters:  # (a checked scene holds every value: another beside it would be ignored)
+        raise ParameterError("a SceneSpec is the whole problem: give no other argument "
+                             "beside it")
+    else:
+        spec = preset
+    values = dict(spec.parameters)  # (the result's own copy)
     packed = pack_points([values])
     results = solve(packed, estimated=np.ones(1, dtype=bool))
     out = results.point(0)
     out["run_time"] = results.run_time
-    return SceneResult(values, out, results.finals[0], PRESET_NOTES.get(preset or "paper", []))
+    notes = PRESET_NOTES.get(spec.preset or DEFAULT_PRESET, [])
+    return SceneResult(values, out, results.finals[0], notes)

@@ -16,12 +16,20 @@ from harvester_sweep import (
     branch_file,
     continuation,
     continue_branch,
+    run_scene,
+    scene,
     sweep_file,
     timescales,
 )
+from harvester_sweep import cli as cli_module
 from harvester_sweep.cli import main
 from harvester_sweep.packing import refusal
-from harvester_sweep.parameters import ParameterError, resolve_parameters
+from harvester_sweep.parameters import (
+    DEFAULT_PRESET,
+    ParameterError,
+    StabilityWarning,
+    resolve_parameters,
+)
 from harvester_sweep.run_estimate import estimate
 
 
@@ -92,6 +100,33 @@ def test_basins_checks_its_file_once(tmp_path, monkeypatch):
                       for f in (100.0, 245.0)]]
 
 
+def test_scene_checks_its_input_once(monkeypatch, capsys):
+    """The command line checks a scene's values once and hands them over: the parameters
+    are resolved once, and an explicit step beyond the contact's stability bound warns once,
+    not once per check."""
+    calls = _counting(monkeypatch, resolve_parameters, scene, cli_module)
+    taken = []
+
+    def stop(packed, **options):
+        taken.append(packed)
+        raise _Stop
+
+    monkeypatch.setattr(scene, "solve", stop)
+    argv = ["scene", "--set", "steps_per_period=256", "--set", "hertz_stiffness=1e12",
+            "--set", "gap=2e-6"]
+    with pytest.raises(_Stop):
+        main(argv)
+    assert len(calls) == 1, calls
+    err = capsys.readouterr().err
+    assert err.count("estimated RK4 stability bound") == 1 and "more parameter sets" not in err
+    # the point run is the one checked
+    (packed,) = taken
+    with pytest.warns(StabilityWarning):
+        expected = scene.pack_points([resolve_parameters("paper", steps_per_period=256,
+                                                         hertz_stiffness=1e12, gap=2e-6)])
+    assert (packed.rows == expected.rows).all() and (packed.states == expected.states).all()
+
+
 def test_a_file_and_a_call_take_the_same_defaults():
     """An option left out of a file has the value it has when left out of the call."""
     branch = branch_file.load_continuation({"continuation": {"start": 300.0, "stop": 250.0}})
@@ -105,6 +140,11 @@ def test_a_file_and_a_call_take_the_same_defaults():
     call = inspect.signature(basin_map).parameters
     for name in ("preset", "samples", "seed", "box", "shock"):
         assert getattr(grid, name) == call[name].default, name
+    # one default preset: a sweep file, the scene's and the command line's
+    assert sweep_file.load_sweep({"grid": {"frequency": [140.0]}}).preset \
+        == inspect.signature(run_scene).parameters["preset"].default \
+        == cli_module._parser().parse_args(["scene"]).preset \
+        == DEFAULT_PRESET == branch.preset == grid.preset
 
 
 def test_a_checked_spec_is_taken_whole_or_refused():
@@ -117,6 +157,8 @@ def test_a_checked_spec_is_taken_whole_or_refused():
     for kwargs in ({"samples": 5}, {"steps_per_period": 512}, {"preset": "strong_coupling"}):
         with pytest.raises(ParameterError, match="BasinSpec is the whole problem"):
             basin_map(grid, **kwargs)
+    with pytest.raises(ParameterError, match="SceneSpec is the whole problem"):
+        run_scene(scene.check_scene(gap=2e-6), gap=3e-6)
 
 
 def test_one_rate_drives_every_run_time_estimate(monkeypatch):
