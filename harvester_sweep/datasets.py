@@ -11,7 +11,7 @@ import numpy as np
 import xarray as xr
 
 from .outputs import OUTPUTS, RUN_OUTPUTS, SCENE_OUTPUTS, SERIES, STATUS_NAMES, STROBES
-from .parameters import DEFAULT_PRESET, PARAMETERS, PRESET_NOTES, resolve_parameters
+from .parameters import DEFAULT_PRESET, PARAMETERS, PRESET_NOTES
 
 
 def multiplier_coordinate(n: int) -> dict:
@@ -239,8 +239,7 @@ def branch_dataset(branch, spec) -> xr.Dataset:
     coords = {"point": ("point", np.arange(len(points)), {
         "units": "1", "long_name": "point along the branches, in the order followed"}),
         **multiplier_coordinate(mult.shape[1])}
-    fixed = resolve_parameters(spec.preset, **spec.fixed,
-                               **{parameter: spec.start, "steps_per_period": spec.steps})
+    fixed = dict(spec.base)  # (the branch's first point, as the spec's check resolved it)
     fixed.pop(parameter)
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(run_attributes(fixed, PRESET_NOTES.get(spec.preset or DEFAULT_PRESET, [])))

@@ -16,6 +16,7 @@ from harvester_sweep import (
     branch_file,
     continuation,
     continue_branch,
+    datasets,
     run_scene,
     scene,
     sweep_file,
@@ -79,6 +80,23 @@ def test_continue_checks_its_file_once(tmp_path, monkeypatch):
     assert (problem.parameter, problem.start, problem.stop) == ("frequency", 300.0, 210.0)
     assert problem.base == resolve_parameters("paper", gap=1e-6, frequency=300.0,
                                               steps_per_period=problem.steps)
+
+
+def test_a_branch_dataset_takes_its_parameters_from_the_spec(monkeypatch):
+    """The branch's dataset writes the fixed parameters its checked spec holds, without
+    resolving them again."""
+    spec = branch_file.load_continuation({
+        "parameters": {"gap": 1.0, "steps_per_period": 256},  # (stop out of reach: quick)
+        "continuation": {"start": 140.0, "stop": 141.0, "max_points": 3}})
+    again = _counting(monkeypatch, resolve_parameters, datasets)
+    ds = continue_branch(spec)
+    assert again == []
+    fixed = dict(spec.base)
+    fixed.pop("frequency")
+    for name, value in fixed.items():
+        written = ds.attrs[name]
+        assert written == (str(value).lower() if value is None or isinstance(value, bool)
+                           else value), name
 
 
 def test_basins_checks_its_file_once(tmp_path, monkeypatch):
