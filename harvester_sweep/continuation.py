@@ -219,7 +219,7 @@ class _Problem:
     def lam(self, z) -> float:
         return self.lo + z[self.D] * self.range
 
-    def at(self, steps: int) -> "_Problem":
+    def at(self, steps: int) -> _Problem:
         """The same problem at ``steps`` steps per period (the packed rows shared)."""
         other = copy.copy(self)
         other.steps = int(steps)
@@ -492,6 +492,20 @@ def _continue(spec: ContinuationSpec) -> Branch:
         x = max(x, max(free))
     row = pack_parameters(p0)
     scale = orbit_scales(row, x, m[METRIC.v_peak], state_size(row[None]))
+    # the voltage of that amplitude at the most of the range: a voltage that grows with the
+    # parameter (a resistance continued from 100 Ohm, where w R C_p << 1) measured by the
+    # start's would make Newton's tolerance and the copies' moves in V ever finer relative
+    # to the orbit (the strong-coupling branch in resistance at 140 Hz stalled at 4.86 kOhm,
+    # its V 50 times its start scale, its corrections failing on the copies' noise)
+    samples = np.linspace(start, stop, STEP_SAMPLES)
+    rows = np.array([pack_parameters(resolve_parameters(
+        preset, **{**fixed, parameter: float(v), "steps_per_period": steps}))
+        for v in samples])
+    widest = orbit_scales(rows, np.full(len(rows), x), m[METRIC.v_peak],
+                          len(scale)).max(axis=0)
+    voltage = [k for k, c in enumerate(period_map.COMPONENTS[:len(scale)])
+               if c.scale == "voltage"]
+    scale[voltage] = widest[voltage]
     lo, hi = min(start, stop), max(start, stop)
     problem = _Problem(p0, preset, fixed, parameter, lo, hi, steps, scale)
     period = int(m[METRIC.orbit_period])
