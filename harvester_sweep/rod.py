@@ -169,7 +169,7 @@ class RodEquivalent:
     natural_frequency : float
         Omega_1 / (2 pi). [Hz]
     forcing_factor : float
-        beta_1 psi_1(L_r) = 8 / pi^2: the one-mode rod feels ``m_s * forcing_factor * A
+        beta_1 psi_1(L_r) = 4 / pi: the one-mode rod feels ``m_s * forcing_factor * A
         sin(w t)`` from the base where a lumped mass on a spring feels ``m_s A sin(w t)``.
         [-]
     """
