@@ -35,7 +35,7 @@ MUS = [0.0, 0.1, 1.0, 10.0, 100.0]
 
 
 def _terms(lam, mu, j):
-    """The transcendental equation's five terms (BEAM.md), written out again here."""
+    """The transcendental equation's five terms (docs/model.md, "The beam"), written out again here."""
     c, s, ch, sh = math.cos(lam), math.sin(lam), math.cosh(lam), math.sinh(lam)
     return [1.0, c * ch, lam * mu * (c * sh - s * ch), -lam**3 * j * (ch * s + sh * c),
             lam**4 * mu * j * (1 - c * ch)]
@@ -121,7 +121,7 @@ def test_modes_meet_the_boundary_conditions(beam):
 
 
 def _textbook_shape(lam, mu, x):
-    """cos x - cosh x + sigma (sin x - sinh x) as BEAM.md writes it, in floats."""
+    """cos x - cosh x + sigma (sin x - sinh x) as docs/model.md writes it, in floats."""
     c, sn, ch, sh = np.cos(lam), np.sin(lam), np.cosh(lam), np.sinh(lam)
     sigma = (sn - sh + lam * mu * (c - ch)) / (c + ch - lam * mu * (sn - sh))
     return np.cos(x) - np.cosh(x) + sigma * (np.sin(x) - np.sinh(x))
