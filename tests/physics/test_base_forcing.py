@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harvester_sweep import cli, resolve_parameters, run_scene
+from harvester_sweep import cli, resolve_parameters, run_scene, run_sweep
 from harvester_sweep.linear import linear_response
 from harvester_sweep.parameters import ParameterError
 from tests.helpers import phasor
@@ -89,3 +89,16 @@ def test_a_moving_stop_takes_the_paper_forcing_only(capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(
         f"harvester-sweep: error: base_forcing_factor [-] = {MU}")
+
+
+def test_a_sweep_over_the_factor_is_the_sweep_over_the_amplitude_bit_for_bit():
+    """Along a grid axis (the step chosen per point, orbits with and without impacts)."""
+    factors, amplitude = [1.0, MU, 2.5], 0.8  # [-], [m/s^2]
+    with_mu = run_sweep({"parameters": {"amplitude": amplitude},
+                         "grid": {"base_forcing_factor": factors, "gap": [1e-6, 12e-6]}},
+                        None, progress=False)
+    plain = run_sweep({"grid": {"amplitude": [mu * amplitude for mu in factors],
+                                "gap": [1e-6, 12e-6]}}, None, progress=False)
+    assert (with_mu.impacts_per_period > 0).any() and (with_mu.impacts_per_period == 0).any()
+    for name, variable in with_mu.data_vars.items():
+        np.testing.assert_array_equal(variable.values, plain[name].values, err_msg=name)
