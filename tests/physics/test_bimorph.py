@@ -35,7 +35,7 @@ MUS = [0.0, 0.1, 1.0, 10.0, 100.0]
 
 
 def _terms(lam, mu, j):
-    """The transcendental equation's five terms (docs/model.md, "The beam"), written out again here."""
+    """The transcendental equation's five terms (docs/model.md, "The beam"), written again."""
     c, s, ch, sh = math.cos(lam), math.sin(lam), math.cosh(lam), math.sinh(lam)
     return [1.0, c * ch, lam * mu * (c * sh - s * ch), -lam**3 * j * (ch * s + sh * c),
             lam**4 * mu * j * (1 - c * ch)]
