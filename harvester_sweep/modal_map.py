@@ -1,6 +1,7 @@
-"""A linear system with contact surfaces (``models.beam.LinearSystem``) packed into the
-modal engine's rows: the system in the eigen-coordinates of its linear part, relative to
-its linear steady state.
+"""The modal engine's period map: a linear system with contact surfaces
+(``models.beam.LinearSystem``) packed into the engine's rows (the system in the
+eigen-coordinates of its linear part, relative to its linear steady state), and its runs.
+The only module outside ``_engine`` that calls the modal engine.
 
 The eigenvectors are taken of the balanced matrix (``scipy.linalg.matrix_balance``): a
 beam's rates are its displacements times frequencies up to 1e6 1/s, and an unbalanced
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from ._engine import modal
 from ._engine.modal import REAL, complex_fields, real_fields
 
 #: The largest condition number of the eigenvector basis accepted: beyond it the linear
@@ -96,3 +98,30 @@ def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resista
     r[scale_o:scale_o + D] = scale
     r[yp_o:yp_o + D] = P.imag
     return Packed(c, r, W, Winv, P, (D, S, K))
+
+
+def run(packs, starts) -> tuple:
+    """Run points to steady state: ``packs`` (list of :class:`Packed` of one model's
+    dimensions), ``starts`` (n, D) states at phase 0. Returns the metric rows
+    (n, _engine.modal.metric_size(K)), the end states (n, D) at phase 0 and the last
+    SAMPLES strobes (n, SAMPLES, D), oldest first."""
+    D, S, K = packs[0].dims
+    z = np.array([pk.to_modal(y) for pk, y in zip(packs, starts)], dtype=complex)
+    crows = np.array([pk.crow for pk in packs])
+    rrows = np.array([pk.rrow for pk in packs])
+    metrics = np.empty((len(packs), modal.metric_size(K)))
+    strobes = np.empty((len(packs), modal.SAMPLES, D))
+    modal.run_points(crows, rrows, z, metrics, strobes, D, S, K)
+    ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
+    return metrics, ends, strobes
+
+
+def record(packed: Packed, start, periods: int, rows: int) -> np.ndarray:
+    """Every sample of ``periods`` forcing periods from state ``start`` (D,) at phase 0,
+    at most ``rows``: (n, 1 + S + K) with time [s], each surface's force [N], each
+    output."""
+    D, S, K = packed.dims
+    z = packed.to_modal(start).astype(complex)
+    rec = np.empty((rows, 1 + S + K))
+    n = modal.record(packed.crow, packed.rrow, z, periods, rec, D, S, K)
+    return rec[:n]

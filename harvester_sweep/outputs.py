@@ -200,6 +200,23 @@ _OUTPUTS = (
            "boundaries y(nT)", where="sweep"),
     Output("strobe_voltage", "V", "voltage across the load V at the last forcing period "
            "boundaries y(nT)", where="sweep"),
+    # the beam model's own (harvester_sweep.beam_runs); it books the metrics above that
+    # it shares, where="engine" and "run", under the same names
+    Output("contact_displacement_max", "m", "largest displacement of the beam at the contact "
+           "position (positive towards the stop)", where="beam"),
+    Output("contact_displacement_min", "m", "smallest displacement of the beam at the contact "
+           "position", where="beam"),
+    Output("root_strain_max", "1", "largest magnitude of the bending strain at the root's "
+           "outer piezo surface over the orbit", where="beam"),
+    Output("root_stress_piezo", "Pa", "largest magnitude of the bending stress at the root's "
+           "outer piezo surface, Y_p times root_strain_max", where="beam"),
+    Output("root_stress_substrate", "Pa", "largest magnitude of the bending stress at the "
+           "root's outer substrate surface", where="beam"),
+    Output("modal_amplitude", "m kg0.5", "largest magnitude of each bending mode's "
+           "mass-normalised coordinate over the orbit", where="beam", dims=("mode",)),
+    Output("stop_face_max", "m", "largest displacement of the rod stop's contact face "
+           "towards its base (0 for a rigid stop)", where="beam"),
+    Output("contact_step", "s", "RK4 sub-step in contact of the orbit reported", where="beam"),
 )
 OUTPUTS: dict[str, Output] = {o.name: o for o in _OUTPUTS}
 
@@ -248,7 +265,8 @@ def markdown_table() -> str:
             meaning += ": " + ", ".join(f"{s.code} {s.name}" for s in STATUSES)
         scope = {"scene": " (scene only)", "sweep": " (sweep, over `sample`)",
                  "basin": " (`basin_fractions`, `basin_map`)",
-                 "branch": " (`continue_branch`)"}.get(o.where, "")
+                 "branch": " (`continue_branch`)",
+                 "beam": " (beam model)"}.get(o.where, "")
         rows.append(f"| `{o.name}` | {'-' if o.units == '1' else o.units} | {meaning}{scope} |")
     return "\n".join(rows)
 

@@ -1,0 +1,134 @@
+"""A beam parameter set made into the modal engine's rows: its modes, its linear system
+with contact surfaces, the step's first choice.
+
+The only place a beam parameter dict becomes engine rows (as ``packing`` is for the
+tip-mass model's lane engine).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import bimorph as _bimorph
+from . import rod as _rod
+from .beam_parameters import bimorph, rod
+from .contact import contact_damping
+from .modal_map import Packed, pack
+from .models import beam as beam_model
+from .models import hertz
+
+#: Grid steps per period at least, and per period of the highest bending mode: the grid
+#: looks for touches and samples the outputs, whose extrema and int V^2 dt it
+#: interpolates [-].
+MIN_STEPS = 128
+STEPS_PER_MODE_CYCLE = 4
+#: RK4 sub-steps per estimated contact duration, the first choice before the step-halving
+#: check [-].
+SUBSTEPS_PER_CONTACT = 64
+#: Divergence limit, in units of each component's scale [-].
+LIMIT = 1e6
+
+
+@dataclass
+class BeamSystem:
+    """A beam parameter set's model: its modes, its rod's, the linear system."""
+
+    modes: _bimorph.Modes
+    rod_modes: _rod.RodModes | None
+    system: beam_model.LinearSystem
+    contact_damping: float
+    scale: np.ndarray
+
+
+def beam_system(p: dict) -> BeamSystem:
+    """The model of a validated beam parameter set (beam_parameters.resolve_beam_parameters)."""
+    beam = bimorph(p)
+    modes = _bimorph.modes(beam, p["n_modes"])
+    stop = rod(p)
+    rm = None if stop is None else _rod.rod_modes(stop, p["rod_modes"])
+    n = p["n_modes"]
+    strain = (beam.substrate_thickness / 2 + beam.piezo_thickness) * modes.root_curvature
+    system = beam_model.linear_system(
+        omega=modes.omega, zeta=np.full(n, p["damping_ratio"]), chi=modes.coupling,
+        gamma=modes.forcing, phi_tip=modes.tip,
+        phi_contact=modes.shape(p["contact_position"])[:, 0], root_strain=strain,
+        capacitance=beam.capacitance, resistance=p["resistance"], gap=p["gap"],
+        lower_gap=p["lower_gap"], rod_omega=() if rm is None else rm.omega,
+        rod_zeta=p["rod_damping_ratio"], rod_face=() if rm is None else rm.face,
+        rod_forcing=() if rm is None else rm.forcing)
+    ch = (p["contact_damping"] if p["contact_damping"] is not None
+          else contact_damping(p["contact_law"], p["restitution"], p["impact_velocity"]))
+    return BeamSystem(modes, rm, system, ch, _scales(p, system))
+
+
+def _linear_amplitudes(p: dict, system) -> np.ndarray:
+    """|Y| (D,): each component's amplitude in the linear steady state (no stop)."""
+    omega = 2 * math.pi * p["frequency"]
+    M = system.matrix
+    return np.abs(np.linalg.solve(1j * omega * np.eye(len(M)) - M,
+                                  system.forcing * p["amplitude"]))
+
+
+def _scales(p: dict, system) -> np.ndarray:
+    """Each component's scale (D,), what the settle test and the divergence limit measure
+    it against. The modal coordinates are mass-normalised, so one displacement scale
+    serves every mode (beam's and rod's) and their rates take it times their own
+    frequency: a norm of the motion's energy. That scale is the largest modal amplitude
+    of the linear response, or where the stop caps the motion, the gap's share of the
+    first mode; the voltage's is its linear amplitude."""
+    amp = _linear_amplitudes(p, system)
+    M = system.matrix
+    # the displacement coordinates: rows of M that say "its rate is that component"
+    pairs = [(k, int(np.flatnonzero(row)[0])) for k, row in enumerate(M)
+             if np.count_nonzero(row) == 1 and row.max() == 1.0]
+    size = float(max(amp[k] for k, _ in pairs))
+    first = abs(float(system.surfaces[0][pairs[0][0]]))
+    if p["gap"] > 0 and first > 0:
+        size = min(size, p["gap"] / first)
+    scale = np.full(len(M), size)
+    for k, rate in pairs:  # a rate's row of M holds its mode's -omega^2 at column k
+        scale[rate] = size * math.sqrt(abs(M[rate, k]))
+    volt = list(system.output_names).index("voltage")
+    v = int(np.flatnonzero(system.outputs[volt])[0])
+    scale[v] = max(float(amp[v]), 1e-300)
+    return scale
+
+
+def first_steps(p: dict, bs: BeamSystem) -> tuple[int, float]:
+    """The first choice of grid steps per period [-] and contact sub-step [s]: the grid
+    samples the highest bending mode STEPS_PER_MODE_CYCLE times a cycle; the sub-step is
+    the estimated contact duration over SUBSTEPS_PER_CONTACT."""
+    steps = p["steps_per_period"]
+    if steps is None:
+        ratio = float(bs.modes.omega[-1]) / (2 * math.pi * p["frequency"])
+        steps = max(MIN_STEPS, 2 ** math.ceil(math.log2(STEPS_PER_MODE_CYCLE * ratio)))
+    substep = p["contact_step"]
+    if substep is None:
+        substep = contact_duration(p, bs) / SUBSTEPS_PER_CONTACT
+    return int(steps), float(substep)
+
+
+def contact_duration(p: dict, bs: BeamSystem) -> float:
+    """Estimated duration [s] of an impact: the undamped Hertz contact of the contact
+    point's apparent mass (1 / sum of the squared mode shapes there, the beam's and the
+    rod's) at the approach velocity of the linear response's amplitude there."""
+    surface = bs.system.surfaces[0]
+    mass = 1.0 / float(np.sum(surface ** 2))
+    omega = 2 * math.pi * p["frequency"]
+    reach = float(np.abs(surface @ _linear_amplitudes(p, bs.system)))
+    velocity = max(omega * max(reach - p["gap"], reach * 1e-3), 1e-12)
+    delta = hertz.penetration(0.5 * mass * velocity ** 2, p["hertz_stiffness"])
+    # Hertz's impact of a mass: 2.94 delta_max / v
+    return 2.94 * delta / velocity
+
+
+def pack_beam(p: dict, bs: BeamSystem, steps: int, substep: float) -> Packed:
+    """The rows of a beam point at ``steps`` grid steps per period and sub-step ``substep``
+    [s]."""
+    S = len(bs.system.surfaces)
+    return pack(bs.system, p["frequency"], p["amplitude"], [p["hertz_stiffness"]] * S,
+                [bs.contact_damping] * S, p["resistance"], steps, substep, p["max_periods"],
+                p["settle_tolerance"], LIMIT, bs.scale)

@@ -1,0 +1,147 @@
+"""The beam model's parameters: names, units, ranges, presets and validation.
+
+The beam (a bimorph in ``n_modes`` bending modes striking a stop at ``contact_position``,
+the stop rigid or a rod in ``rod_modes`` modes) shares the load, the forcing, the stop's
+contact law and the run's numerics with the tip-mass model: those parameters are the
+same objects as in :data:`harvester_sweep.parameters.PARAMETERS`, with the same names,
+units and ranges. The presets come from :data:`harvester_sweep.bimorph.BEAM_PRESETS`.
+"""
+
+from __future__ import annotations
+
+from types import MappingProxyType
+
+from .bimorph import BEAM_PRESETS, CONNECTIONS, MAX_MODES, Bimorph
+from .contact import CONTACT_LAWS
+from .materials import MATERIALS, PIEZO_MATERIALS
+from .parameters import PARAMETERS, Parameter, ParameterError, value_text
+from .rod import MAX_MODES as MAX_ROD_MODES
+from .rod import Rod
+
+_P = Parameter
+_SHARED = ("damping_ratio", "resistance", "amplitude", "frequency", "gap", "lower_gap",
+           "hertz_stiffness", "restitution", "impact_velocity", "contact_damping", "accuracy",
+           "settle_tolerance")
+
+#: Every parameter of the beam model, by name.
+BEAM_PARAMETERS: dict[str, Parameter] = {
+    p.name: p
+    for p in [
+        _P("length", "m", "beam length L from the clamp to the tip", low=0, low_open=True),
+        _P("width", "m", "beam width b", low=0, low_open=True),
+        _P("substrate_thickness", "m", "substrate thickness h_s", low=0, low_open=True),
+        _P("piezo_thickness", "m", "thickness h_p of each piezo layer", low=0, low_open=True),
+        _P("substrate", "1", "substrate material", kind="choice", choices=tuple(MATERIALS)),
+        _P("piezo", "1", "piezoceramic material", kind="choice",
+           choices=tuple(PIEZO_MATERIALS)),
+        _P("tip_mass", "kg", "tip mass M_t", low=0),
+        _P("tip_inertia", "kg m^2", "rotary inertia of the tip mass I_t", low=0),
+        _P("connection", "1", "how the two piezo layers feed the load", kind="choice",
+           choices=CONNECTIONS),
+        _P("n_modes", "1", "bending modes of the beam", kind="int", low=1, high=MAX_MODES),
+        _P("contact_position", "m", "span position s_c of the contact from the clamp "
+           "(0 < s_c <= length)", low=0, low_open=True),
+        _P("rod_modes", "1", "longitudinal modes of a rod stop (0: a rigid stop)", kind="int",
+           low=0, high=MAX_ROD_MODES),
+        _P("rod_length", "m", "length of the rod stop", low=0, low_open=True),
+        _P("rod_area", "m^2", "cross-section of the rod stop", low=0, low_open=True),
+        _P("rod_material", "1", "material of the rod stop", kind="choice",
+           choices=tuple(MATERIALS)),
+        _P("rod_damping_ratio", "1", "modal damping ratio of the rod stop", low=0, high=1,
+           high_open=True),
+        _P("steps_per_period", "1", "grid steps per forcing period that look for contact and "
+           "sample the outputs (unset: chosen from the modes and `accuracy`)", kind="int",
+           low=16, high=1e7, optional=True),
+        _P("contact_step", "s", "RK4 sub-step in contact (unset: chosen from the contact's "
+           "time scale and `accuracy`)", low=0, low_open=True, optional=True),
+        _P("max_periods", "1", "budget of forcing periods to reach steady state", kind="int",
+           low=1, high=1e7),
+        *(PARAMETERS[name] for name in _SHARED),
+        _P("contact_law", "1", "contact damping law", kind="choice",
+           choices=tuple(CONTACT_LAWS)),
+    ]
+}
+
+_TABLE_1_STOP = dict(damping_ratio=0.01, resistance=10e3, amplitude=1.0, frequency=140.0,
+                     gap=1e-6, lower_gap=None, hertz_stiffness=9.03e8, restitution=0.85,
+                     impact_velocity=1.76e-3, contact_damping=None,
+                     contact_law="lankarani_nikravesh", accuracy=1e-7,
+                     settle_tolerance=1e-10, steps_per_period=None, contact_step=None,
+                     max_periods=20000, n_modes=5)
+
+
+def _preset(name: str) -> MappingProxyType:
+    beam, rod, position = BEAM_PRESETS[name]
+    values = dict(_TABLE_1_STOP, length=beam.length, width=beam.width,
+                  substrate_thickness=beam.substrate_thickness,
+                  piezo_thickness=beam.piezo_thickness, substrate=beam.substrate,
+                  piezo=beam.piezo, tip_mass=beam.tip_mass, tip_inertia=beam.tip_inertia,
+                  connection=beam.connection, contact_position=position,
+                  rod_modes=0 if rod is None else 5,
+                  rod_length=40e-3 if rod is None else rod.length,
+                  rod_area=2e-5 if rod is None else rod.area,
+                  rod_material="steel" if rod is None else rod.material,
+                  rod_damping_ratio=0.0 if rod is None else rod.damping_ratio)
+    return MappingProxyType(values)
+
+
+#: The beam's presets (read-only), from bimorph.BEAM_PRESETS with the paper's stop, load
+#: and forcing (Table 1).
+BEAM_PARAMETER_PRESETS = {name: _preset(name) for name in BEAM_PRESETS}
+#: The preset a beam run starts from unless told otherwise.
+DEFAULT_BEAM_PRESET = "bimorph_tip"
+#: What each preset assumes, printed with every result.
+BEAM_PRESET_NOTES = {
+    "bimorph_tip": ["a PZT-5A bimorph on brass whose one-mode reduction has Table 1's 150 Hz "
+                    "and 2.5 g, striking at its tip Table 1's stop (docs/model.md)"],
+    "mak_rod": ["the bimorph_tip beam striking at 0.8 L a steel rod 40 mm long, 5 mm across, "
+                "in 5 longitudinal modes (the arrangement of Mak et al. 2011)"],
+}
+
+
+def resolve_beam_parameters(preset: str | None = DEFAULT_BEAM_PRESET, **overrides) -> dict:
+    """The full, validated beam parameter set: a preset updated with ``overrides`` (SI units
+    of :data:`BEAM_PARAMETERS`). Raises ParameterError naming the parameter, its unit and
+    its allowed range."""
+    preset = DEFAULT_BEAM_PRESET if preset is None else preset
+    if not isinstance(preset, str) or preset not in BEAM_PARAMETER_PRESETS:
+        raise ParameterError(f"preset {value_text(preset)} is unknown for the beam: must be "
+                             f"one of {', '.join(BEAM_PARAMETER_PRESETS)}")
+    for name in overrides:
+        if name not in BEAM_PARAMETERS:
+            raise ParameterError(f"unknown beam parameter {value_text(name)}: known parameters "
+                                 f"are {', '.join(BEAM_PARAMETERS)}")
+    p = dict(BEAM_PARAMETER_PRESETS[preset])
+    p.update(overrides)
+    checked = {name: BEAM_PARAMETERS[name].check(p[name]) for name in BEAM_PARAMETERS}
+    if checked["contact_position"] > checked["length"]:
+        raise ParameterError(
+            f"contact_position [m] = {value_text(checked['contact_position'])}: must be in "
+            f"(0, length = {checked['length']:g} m]")
+    if checked["rod_modes"] > 0 and checked["lower_gap"] is not None:
+        raise ParameterError(
+            f"lower_gap [m] = {value_text(checked['lower_gap'])}: a second stop below beside a "
+            f"rod stop is not modelled: leave lower_gap unset or rod_modes 0")
+    try:
+        bimorph(checked)
+        rod(checked)
+    except ValueError as error:
+        raise ParameterError(str(error)) from None
+    return checked
+
+
+def bimorph(p: dict) -> Bimorph:
+    """The beam of a validated parameter set."""
+    return Bimorph(length=p["length"], width=p["width"],
+                   substrate_thickness=p["substrate_thickness"],
+                   piezo_thickness=p["piezo_thickness"], substrate=p["substrate"],
+                   piezo=p["piezo"], tip_mass=p["tip_mass"], tip_inertia=p["tip_inertia"],
+                   connection=p["connection"])
+
+
+def rod(p: dict) -> Rod | None:
+    """The rod stop of a validated parameter set, None for a rigid stop."""
+    if p["rod_modes"] == 0:
+        return None
+    return Rod(length=p["rod_length"], area=p["rod_area"], material=p["rod_material"],
+               damping_ratio=p["rod_damping_ratio"])

@@ -1,0 +1,344 @@
+"""The beam model's analyses: points to steady state at the accuracy asked, sweeps over
+any parameters (frequency up and down, continuing each line's state), a scene's orbit
+recorded step by step; their CF datasets.
+
+Each point is solved at its first step choice and again with the grid and the contact
+sub-step halved, and halved again where the two disagree by more than ``accuracy``: the
+error estimate reported is that change (docs/numerics.md, "The beam").
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from . import modal_map
+from ._engine.modal import HEAD, METRIC_HEAD
+from .beam_packing import BeamSystem, beam_system, first_steps, pack_beam
+from .beam_parameters import (
+    BEAM_PARAMETERS,
+    BEAM_PRESET_NOTES,
+    DEFAULT_BEAM_PRESET,
+    bimorph,
+    resolve_beam_parameters,
+)
+from .models import beam as beam_model
+from .outputs import OUTPUTS, STATUS_FLAGS
+from .parameters import ParameterError
+from .version import version
+
+#: Halvings of the grid and the contact sub-step the accuracy check may take beyond the
+#: first choice [-].
+MAX_LEVELS = 5
+#: The metrics whose change at halved steps is the error estimate (relative to their own
+#: size; the extremes of displacement relative to the larger of them) [-].
+ESTIMATED = ("power", "v_peak", "x_max", "x_min", "root_strain_max")
+_SETTLED, _NOT_SETTLED, _DIVERGED = 0, 1, 2
+#: The scalar outputs of a beam point, in the order of a solution's table.
+SCALARS = ("power", "v_rms", "v_peak", "power_peak", "x_max", "x_min",
+           "contact_displacement_max", "contact_displacement_min", "contact_force_max",
+           "impacts_per_period", "approach_velocity", "root_strain_max", "root_stress_piezo",
+           "root_stress_substrate", "stop_face_max", "orbit_period", "status", "periods_run",
+           "error_estimate", "steps_per_period", "contact_step")
+
+
+@functools.lru_cache(maxsize=512)
+def _system(key: tuple) -> BeamSystem:
+    return beam_system(dict(key))
+
+
+def system_of(p: dict) -> BeamSystem:
+    """The model of a validated beam parameter set, remembered for the points of a sweep
+    that share it."""
+    return _system(tuple(sorted(p.items())))
+
+
+@dataclass
+class BeamSolution:
+    """Points solved: each output (SCALARS, and ``modal_amplitude`` (n, N)) as an array
+    over the points, with the end states (n, D) at phase 0 and the last strobes (n,
+    SAMPLES, D)."""
+
+    values: dict
+    ends: np.ndarray
+    strobes: np.ndarray
+
+
+def _table(p: dict, bs: BeamSystem, row: np.ndarray) -> dict:
+    """A point's outputs from its engine metric row."""
+    names = bs.system.output_names
+    K = len(names)
+    nh = len(METRIC_HEAD)
+    hi = dict(zip(names, row[nh:nh + K]))
+    lo = dict(zip(names, row[nh + K:nh + 2 * K]))
+    beam = bimorph(p)
+    strain = max(abs(hi["root_strain"]), abs(lo["root_strain"]))
+    v_peak = max(abs(hi["voltage"]), abs(lo["voltage"]))
+    half = beam.substrate_thickness / 2
+    out = {
+        "power": row[HEAD.power], "v_rms": row[HEAD.voltage_rms], "v_peak": v_peak,
+        "power_peak": v_peak ** 2 / p["resistance"],
+        "x_max": hi["tip_displacement"], "x_min": lo["tip_displacement"],
+        "contact_displacement_max": hi["contact_displacement"],
+        "contact_displacement_min": lo["contact_displacement"],
+        "contact_force_max": row[HEAD.contact_force],
+        "impacts_per_period": row[HEAD.impacts],
+        "approach_velocity": row[HEAD.approach_velocity],
+        "root_strain_max": strain,
+        "root_stress_piezo": beam._piezo("youngs_modulus") * strain,
+        "root_stress_substrate": beam._substrate("youngs_modulus") * strain * half
+        / (half + beam.piezo_thickness),
+        "stop_face_max": max(hi["stop_face"], 0.0),
+        "orbit_period": row[HEAD.period], "status": row[HEAD.status],
+        "periods_run": row[HEAD.periods_run],
+    }
+    modal = [max(abs(hi[f"eta_{r}"]), abs(lo[f"eta_{r}"]))
+             for r in range(1, len(bs.modes.omega) + 1)]
+    return out, np.array(modal)
+
+
+def _change(a: dict, b: dict) -> float:
+    """The relative change of the ESTIMATED metrics from a to b (NaN where either did not
+    settle)."""
+    if a["status"] != _SETTLED or b["status"] != _SETTLED:
+        return math.nan
+    reach = max(abs(b["x_max"]), abs(b["x_min"]), 1e-300)
+    worst = 0.0
+    for name in ESTIMATED:
+        size = reach if name in ("x_max", "x_min") else max(abs(b[name]), 1e-300)
+        worst = max(worst, abs(a[name] - b[name]) / size)
+    return worst
+
+
+def solve(points: list, starts=None) -> BeamSolution:
+    """Each validated beam parameter set of ``points`` to steady state from ``starts``
+    ((n, D) states at phase 0; None: each point's linear steady state), at the step that
+    meets its ``accuracy``. Points of different state sizes are solved in groups."""
+    n = len(points)
+    systems = [system_of(p) for p in points]
+    dims = [len(bs.system.matrix) for bs in systems]
+    values = {name: np.full(n, np.nan) for name in SCALARS}
+    modal = [None] * n
+    ends, strobes = [None] * n, [None] * n
+    for D in sorted(set(dims)):
+        idx = [i for i in range(n) if dims[i] == D]
+        _solve_group([points[i] for i in idx], [systems[i] for i in idx],
+                     None if starts is None else [starts[i] for i in idx], idx, values,
+                     modal, ends, strobes)
+    width = max(len(m) for m in modal)
+    amp = np.full((n, width), np.nan)
+    for i, m in enumerate(modal):
+        amp[i, :len(m)] = m
+    values["modal_amplitude"] = amp
+    return BeamSolution(values, ends, strobes)
+
+
+def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
+    first = [first_steps(p, bs) for p, bs in zip(points, systems)]
+    if starts is None:
+        starts = [None] * len(points)
+    starts = [np.zeros(len(bs.system.matrix)) if s is None else np.asarray(s, dtype=float)
+              for bs, s in zip(systems, starts)]
+    linear = [s is None for s in starts]
+    del linear
+
+    def level(which, lv):
+        packs, begin = [], []
+        for k in which:
+            steps, sub = first[k]
+            pk = pack_beam(points[k], systems[k], steps * 2 ** lv, sub / 2 ** lv)
+            packs.append(pk)
+            begin.append(starts[k])
+        return packs, modal_map.run(packs, begin) if packs else None
+
+    todo = list(range(len(points)))
+    coarse = {}
+    packs, (m, e, s) = level(todo, 0)
+    for j, k in enumerate(todo):
+        coarse[k] = (_table(points[k], systems[k], m[j]), e[j], s[j], 0)
+    done = {}
+    lv = 1
+    while todo and lv <= MAX_LEVELS:
+        packs, (m, e, s) = level(todo, lv)
+        nxt = []
+        for j, k in enumerate(todo):
+            fine = (_table(points[k], systems[k], m[j]), e[j], s[j], lv)
+            est = _change(coarse[k][0][0], fine[0][0])
+            if est <= points[k]["accuracy"] or not math.isfinite(est) or lv == MAX_LEVELS:
+                done[k] = fine, est
+            else:
+                coarse[k] = fine
+                nxt.append(k)
+        todo, lv = nxt, lv + 1
+    for k, ((table, amp), end, strobe, lv_k), est in (
+            (k, *done[k]) for k in range(len(points))):
+        i = idx[k]
+        for name, v in table.items():
+            values[name][i] = v
+        values["error_estimate"][i] = est
+        steps, sub = first[k]
+        values["steps_per_period"][i] = steps * 2 ** lv_k
+        values["contact_step"][i] = sub / 2 ** lv_k
+        modal[i], ends[i], strobes[i] = amp, end, strobe
+
+
+def points_of(preset: str | None, fixed: dict, axes: dict) -> tuple[list, list]:
+    """The validated points of a grid: ``axes`` (name -> values, in order), each point
+    the preset with ``fixed`` and its coordinates; returns (points, shape)."""
+    for name in axes:
+        if name not in BEAM_PARAMETERS:
+            raise ParameterError(f"unknown beam parameter {name!r} on a sweep axis: known "
+                                 f"parameters are {', '.join(BEAM_PARAMETERS)}")
+    shape = [len(v) for v in axes.values()]
+    points = [resolve_beam_parameters(preset, **fixed, **dict(zip(axes, combo)))
+              for combo in itertools.product(*axes.values())]
+    return points, shape
+
+
+def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
+               **fixed) -> xr.Dataset:
+    """Steady states of the beam over a grid (``axes``: parameter name -> values, SI
+    units). With ``directions`` ("up", "down" or both) and a ``frequency`` axis, each line
+    along frequency is swept in that direction, every point starting from the previous
+    one's orbit (the stop's hysteresis); otherwise every point starts from its linear
+    steady state. Returns a CF dataset (``model`` = "beam")."""
+    axes = {name: np.asarray(v, dtype=float) if name != "n_modes" else np.asarray(v)
+            for name, v in axes.items()}
+    directions = (directions,) if isinstance(directions, str) else directions
+    if directions and "frequency" not in axes:
+        raise ParameterError("directions [-]: a sweep up or down needs a frequency axis")
+    points, shape = points_of(preset, fixed, axes)
+    if not directions:
+        ds = _dataset(solve(points), points, axes, shape)
+    else:
+        parts = [_dataset(_swept(points, axes, shape, d), points, axes, shape)
+                 for d in directions]
+        ds = xr.concat(parts, dim=xr.DataArray(list(directions), dims="direction",
+                                               name="direction"))
+        ds["direction"].attrs = {"long_name": "direction of the frequency sweep",
+                                 "units": "1"}
+    return _attributes(ds, points[0], preset, fixed)
+
+
+def _swept(points, axes, shape, direction) -> BeamSolution:
+    """The grid solved line by line along frequency in ``direction``."""
+    names = list(axes)
+    f_axis = names.index("frequency")
+    grid = np.arange(len(points)).reshape(shape)
+    lines = np.moveaxis(grid, f_axis, -1).reshape(-1, shape[f_axis])
+    order = range(shape[f_axis]) if direction == "up" else range(shape[f_axis] - 1, -1, -1)
+    out = None
+    ends = {}
+    for k in order:
+        ids = lines[:, k]
+        starts = [ends.get(int(line)) for line in range(len(lines))]
+        sol = solve([points[i] for i in ids],
+                    None if k == next(iter(order)) else starts)
+        for line, end in enumerate(sol.ends):
+            ends[line] = end
+        if out is None:
+            out = BeamSolution({n: np.empty((len(points),) + v.shape[1:])
+                                for n, v in sol.values.items()},
+                               np.empty((len(points),) + sol.ends.shape[1:]), None)
+        for n, v in sol.values.items():
+            out.values[n][ids] = v
+    return out
+
+
+def _dataset(sol: BeamSolution, points, axes, shape) -> xr.Dataset:
+    coords = {name: (name, np.asarray(v), {"units": _unit(name),
+                                           "long_name": BEAM_PARAMETERS[name].description})
+              for name, v in axes.items()}
+    data = {}
+    for name, v in sol.values.items():
+        o = OUTPUTS[name]
+        if name == "modal_amplitude":
+            data[name] = (list(axes) + ["mode"], v.reshape(shape + [v.shape[-1]]), o.attrs)
+        else:
+            dtype = o.dtype if name != "status" else "int8"
+            arr = v.reshape(shape)
+            if np.issubdtype(np.dtype(dtype), np.integer):
+                arr = np.nan_to_num(arr, nan=-1).astype(dtype)
+            data[name] = (list(axes), arr, o.attrs)
+    ds = xr.Dataset(data, coords=coords)
+    ds = ds.assign_coords(mode=("mode", np.arange(1, ds.sizes["mode"] + 1),
+                                {"units": "1", "long_name": "bending mode number"}))
+    if "status" in ds:
+        ds["status"].attrs.update(STATUS_FLAGS)
+    has_rod = any(p["rod_modes"] > 0 for p in points)
+    if not has_rod:  # a metric the model does not have is absent, not NaN
+        ds = ds.drop_vars("stop_face_max")
+    return ds
+
+
+def _unit(name: str) -> str:
+    unit = BEAM_PARAMETERS[name].unit
+    return unit
+
+
+def _attributes(ds: xr.Dataset, p: dict, preset, fixed) -> xr.Dataset:
+    ds.attrs.update({
+        "Conventions": "CF-1.8", "title": "harvester_sweep: steady states of the beam model",
+        "source": f"harvester_sweep {version()} modal engine", "model": "beam",
+        "preset": preset or DEFAULT_BEAM_PRESET,
+        "notes": "; ".join(BEAM_PRESET_NOTES.get(preset or DEFAULT_BEAM_PRESET, [])),
+    })
+    for name, value in p.items():
+        if name not in ds.coords and value is not None:
+            ds.attrs[f"parameter_{name}"] = value if not isinstance(value, bool) else int(value)
+    return ds
+
+
+def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
+               **overrides) -> tuple[dict, xr.Dataset]:
+    """One beam point to steady state, then ``periods`` forcing periods of its orbit
+    recorded at every grid step, contact sub-step and switch: (its outputs, a CF dataset
+    of the time history: time [s], tip and contact displacement [m], voltage [V], power
+    [W], contact force [N], root strain [-], rod face [m])."""
+    p = resolve_beam_parameters(preset, **overrides)
+    sol = solve([p])
+    bs = system_of(p)
+    steps = int(sol.values["steps_per_period"][0])
+    pk = pack_beam(p, bs, steps, float(sol.values["contact_step"][0]))
+    rows = periods * (steps + 64 * 64 * 4) + 16
+    rec = modal_map.record(pk, sol.ends[0], periods, rows)
+    S = len(bs.system.surfaces)
+    names = bs.system.output_names
+    col = {name: 1 + S + k for k, name in enumerate(names)}
+    t = rec[:, 0] - rec[0, 0]
+    series = xr.Dataset(
+        {"tip_displacement": ("time", rec[:, col["tip_displacement"]],
+                              {"units": "m", "long_name": "tip displacement relative to the "
+                               "base"}),
+         "contact_displacement": ("time", rec[:, col["contact_displacement"]],
+                                  {"units": "m", "long_name": "displacement at the contact "
+                                   "position"}),
+         "voltage": ("time", rec[:, col["voltage"]],
+                     {"units": "V", "long_name": "voltage across the load"}),
+         "instantaneous_power": ("time", rec[:, col["voltage"]] ** 2 / p["resistance"],
+                                 {"units": "W", "long_name": "instantaneous power V^2/R"}),
+         "contact_force": ("time", rec[:, 1:1 + S].sum(axis=1) if S == 1 else
+                           rec[:, 1] - rec[:, 2],
+                           {"units": "N", "long_name": "contact force: the upper stop's "
+                            "positive, a lower stop's negative"}),
+         "root_strain": ("time", rec[:, col["root_strain"]],
+                         {"units": "1", "long_name": "bending strain at the root's outer "
+                          "piezo surface"}),
+         "stop_face": ("time", rec[:, col["stop_face"]],
+                       {"units": "m", "long_name": "rod stop's face displacement"})},
+        coords={"time": ("time", t, {"units": "s", "long_name": "time from the orbit's "
+                                     "start"})})
+    if p["rod_modes"] == 0:
+        series = series.drop_vars("stop_face")
+    outputs = {name: sol.values[name][0] for name in SCALARS}
+    outputs["modal_amplitude"] = sol.values["modal_amplitude"][0]
+    series.attrs.update({"model": "beam", "Conventions": "CF-1.8"})
+    return outputs, series
+
+
+__all__ = ["BeamSolution", "beam_model", "beam_scene", "beam_sweep", "solve"]
