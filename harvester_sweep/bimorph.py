@@ -451,11 +451,11 @@ def _frequency_and_load(frequency, resistance, amplitude):
     if isinstance(resistance, bool) or not isinstance(resistance, numbers.Real) \
             or not resistance > 0 or math.isnan(resistance):
         raise ValueError(f"resistance [Ohm] = {resistance!r}: must be > 0 (inf: open circuit)")
-    _number("amplitude", "m/s^2", amplitude, "", lambda v: True)
+    _number("amplitude", "m/s^2", amplitude, "(either sign)", lambda v: True)
     return 2 * np.pi * frequency, 1.0 / resistance
 
 
-def modal_response(beam, frequency, resistance: float, *, n_modes: int = MAX_MODES,
+def modal_response(beam, frequency, resistance: float, *, n_modes: int | None = None,
                    damping_ratio=0.0, amplitude: float = 1.0, s=None):
     """The steady state of the N-mode model with no stop, as a sum of modal phasors.
 
@@ -473,8 +473,8 @@ def modal_response(beam, frequency, resistance: float, *, n_modes: int = MAX_MOD
         Excitation frequency f > 0. [Hz]
     resistance : float
         Load R > 0; inf: open circuit. [Ohm]
-    n_modes : int
-        Modes in the sum, 1 to 8. [-]
+    n_modes : int or None
+        Modes in the sum, 1 to 8; None: all of ``beam``'s if it is a Modes, else 8. [-]
     damping_ratio : float or sequence
         zeta_r, one for all modes or one per mode. [-]
     amplitude : float
@@ -489,12 +489,18 @@ def modal_response(beam, frequency, resistance: float, *, n_modes: int = MAX_MOD
     V : complex numpy.ndarray, shape frequency.shape
         Voltage amplitude; the mean power is |V|^2 / (2 R). [V]
     """
-    shapes = beam if isinstance(beam, Modes) else modes(beam, n_modes)
-    if isinstance(beam, Modes) and not 1 <= n_modes <= len(shapes.omega):
-        raise ValueError(f"n_modes [-] = {n_modes!r}: must be from 1 to {len(shapes.omega)}")
+    if isinstance(beam, Modes):
+        shapes = beam
+        n = len(shapes.omega) if n_modes is None else n_modes
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) \
+                or not 1 <= n <= len(shapes.omega):
+            raise ValueError(f"n_modes [-] = {n_modes!r}: must be an integer from 1 to "
+                             f"{len(shapes.omega)} (the modes given)")
+    else:
+        n = MAX_MODES if n_modes is None else n_modes
+        shapes = modes(beam, n)
     bimorph = shapes.beam
     w, conductance = _frequency_and_load(frequency, resistance, amplitude)
-    n = n_modes
     zeta = np.broadcast_to(np.asarray(damping_ratio, dtype=float), (n,))
     if not np.all(np.isfinite(zeta) & (zeta >= 0)):
         raise ValueError("damping_ratio [-] must be finite and >= 0")

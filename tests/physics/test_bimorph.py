@@ -363,6 +363,10 @@ def test_bad_calls_are_refused():
         modal_response(PRESET, 0.0, 1e5)
     with pytest.raises(ValueError, match=r"resistance \[Ohm\]"):
         exact_response(PRESET, 100.0, 0.0)
+    with pytest.raises(ValueError, match=r"n_modes \[-\]"):
+        modal_response(modes(PRESET, 3), 100.0, 1e5, n_modes=4)
+    with pytest.raises(ValueError, match=r"amplitude \[m/s\^2\]"):
+        modal_response(PRESET, 100.0, 1e5, amplitude=float("nan"))
     with pytest.raises(ValueError, match=r"mass_damping \[1/s\]"):
         exact_response(PRESET, 100.0, 1e5, mass_damping=-1.0)
     assert bimorph.MAX_MODES == 8
