@@ -268,6 +268,8 @@ class Modes:
         sigma_r of the mode shape. [-]
     amplitude : numpy.ndarray (n,)
         A_r, the normalisation (signed so that phi_r(L) > 0). [1/sqrt(kg)]
+    growth, decay : numpy.ndarray (n,)
+        P_r and Q_r of the stable form. [-]
     tip, tip_slope, root_curvature : numpy.ndarray (n,)
         phi_r(L) [1/sqrt(kg)], phi_r'(L) [1/(m sqrt(kg))], phi_r''(0) [1/(m^2 sqrt(kg))].
     coupling : numpy.ndarray (n,)
@@ -281,8 +283,8 @@ class Modes:
     omega: np.ndarray
     sigma: np.ndarray
     amplitude: np.ndarray
-    growth: np.ndarray = field(repr=False)  # P_r [-]
-    decay: np.ndarray = field(repr=False)  # Q_r [-]
+    growth: np.ndarray = field(repr=False)
+    decay: np.ndarray = field(repr=False)
     tip: np.ndarray = field(init=False)
     tip_slope: np.ndarray = field(init=False)
     root_curvature: np.ndarray = field(init=False)
