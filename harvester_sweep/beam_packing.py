@@ -16,7 +16,7 @@ from . import bimorph as _bimorph
 from . import rod as _rod
 from .beam_parameters import bimorph, rod
 from .contact import contact_damping
-from .modal_map import Packed, pack
+from .modal_map import ModalPoint, pack
 from .models import beam as beam_model
 from .models import hertz
 
@@ -51,7 +51,7 @@ def beam_system(p: dict) -> BeamSystem:
     rm = None if stop is None else _rod.rod_modes(stop, p["rod_modes"])
     n = p["n_modes"]
     strain = (beam.substrate_thickness / 2 + beam.piezo_thickness) * modes.root_curvature
-    system = beam_model.linear_system(
+    system = beam_model.modal_system(
         omega=modes.omega, zeta=np.full(n, p["damping_ratio"]), chi=modes.coupling,
         gamma=modes.forcing, phi_tip=modes.tip,
         phi_contact=modes.shape(p["contact_position"])[:, 0], root_strain=strain,
@@ -125,7 +125,7 @@ def contact_duration(p: dict, bs: BeamSystem) -> float:
     return 2.94 * delta / velocity
 
 
-def pack_beam(p: dict, bs: BeamSystem, steps: int, substep: float) -> Packed:
+def pack_beam(p: dict, bs: BeamSystem, steps: int, substep: float) -> ModalPoint:
     """The rows of a beam point at ``steps`` grid steps per period and sub-step ``substep``
     [s]."""
     S = len(bs.system.surfaces)

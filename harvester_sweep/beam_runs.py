@@ -115,7 +115,7 @@ def _change(a: dict, b: dict) -> float:
     return worst
 
 
-def solve(points: list, starts=None) -> BeamSolution:
+def solve_beam(points: list, starts=None) -> BeamSolution:
     """Each validated beam parameter set of ``points`` to steady state from ``starts``
     ((n, D) states at phase 0; None: each point's linear steady state), at the step that
     meets its ``accuracy``. Points of different state sizes are solved in groups."""
@@ -214,7 +214,7 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
         raise ParameterError("directions [-]: a sweep up or down needs a frequency axis")
     points, shape = points_of(preset, fixed, axes)
     if not directions:
-        ds = _dataset(solve(points), points, axes, shape)
+        ds = _dataset(solve_beam(points), points, axes, shape)
     else:
         parts = [_dataset(_swept(points, axes, shape, d), points, axes, shape)
                  for d in directions]
@@ -237,7 +237,7 @@ def _swept(points, axes, shape, direction) -> BeamSolution:
     for k in order:
         ids = lines[:, k]
         starts = [ends.get(int(line)) for line in range(len(lines))]
-        sol = solve([points[i] for i in ids],
+        sol = solve_beam([points[i] for i in ids],
                     None if k == next(iter(order)) else starts)
         for line, end in enumerate(sol.ends):
             ends[line] = end
@@ -301,12 +301,12 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
     of the time history: time [s], tip and contact displacement [m], voltage [V], power
     [W], contact force [N], root strain [-], rod face [m])."""
     p = resolve_beam_parameters(preset, **overrides)
-    sol = solve([p])
+    sol = solve_beam([p])
     bs = system_of(p)
     steps = int(sol.values["steps_per_period"][0])
     pk = pack_beam(p, bs, steps, float(sol.values["contact_step"][0]))
     rows = periods * (steps + 64 * 64 * 4) + 16
-    rec = modal_map.record(pk, sol.ends[0], periods, rows)
+    rec = modal_map.record_motion(pk, sol.ends[0], periods, rows)
     S = len(bs.system.surfaces)
     names = bs.system.output_names
     col = {name: 1 + S + k for k, name in enumerate(names)}
@@ -341,4 +341,4 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
     return outputs, series
 
 
-__all__ = ["BeamSolution", "beam_model", "beam_scene", "beam_sweep", "solve"]
+__all__ = ["BeamSolution", "beam_model", "beam_scene", "beam_sweep", "solve_beam"]

@@ -25,7 +25,7 @@ MAX_CONDITION = 1e8
 
 
 @dataclass
-class Packed:
+class ModalPoint:
     """A point packed: its rows and the change of coordinates.
 
     crow, rrow: the complex and real rows (``_engine.modal.layout``); basis W (D, D) and
@@ -50,7 +50,7 @@ class Packed:
 
 
 def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resistance, steps,
-         substep, max_periods, settle, limit, scale) -> Packed:
+         substep, max_periods, settle, limit, scale) -> ModalPoint:
     """Pack a point.
 
     system: models.beam.LinearSystem; frequency [Hz]; amplitude A [m/s^2] of the base
@@ -97,11 +97,11 @@ def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resista
     r[outf_o:outf_o + K * S] = (system.outputs @ system.inputs.T).ravel()
     r[scale_o:scale_o + D] = scale
     r[yp_o:yp_o + D] = P.imag
-    return Packed(c, r, W, Winv, P, (D, S, K))
+    return ModalPoint(c, r, W, Winv, P, (D, S, K))
 
 
 def run(packs, starts) -> tuple:
-    """Run points to steady state: ``packs`` (list of :class:`Packed` of one model's
+    """Run points to steady state: ``packs`` (list of :class:`ModalPoint` of one model's
     dimensions), ``starts`` (n, D) states at phase 0. Returns the metric rows
     (n, _engine.modal.metric_size(K)), the end states (n, D) at phase 0 and the last
     SAMPLES strobes (n, SAMPLES, D), oldest first."""
@@ -111,17 +111,17 @@ def run(packs, starts) -> tuple:
     rrows = np.array([pk.rrow for pk in packs])
     metrics = np.empty((len(packs), modal.metric_size(K)))
     strobes = np.empty((len(packs), modal.SAMPLES, D))
-    modal.run_points(crows, rrows, z, metrics, strobes, D, S, K)
+    modal.settle_points(crows, rrows, z, metrics, strobes, D, S, K)
     ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
     return metrics, ends, strobes
 
 
-def record(packed: Packed, start, periods: int, rows: int) -> np.ndarray:
+def record_motion(packed: ModalPoint, start, periods: int, rows: int) -> np.ndarray:
     """Every sample of ``periods`` forcing periods from state ``start`` (D,) at phase 0,
     at most ``rows``: (n, 1 + S + K) with time [s], each surface's force [N], each
     output."""
     D, S, K = packed.dims
     z = packed.to_modal(start).astype(complex)
     rec = np.empty((rows, 1 + S + K))
-    n = modal.record(packed.crow, packed.rrow, z, periods, rec, D, S, K)
+    n = modal.record_samples(packed.crow, packed.rrow, z, periods, rec, D, S, K)
     return rec[:n]

@@ -19,7 +19,7 @@ penetration ``c_s . y - g_s`` whose rate is ``c_s . M y`` (the force does not re
 penetration's rate directly: it acts on accelerations). The modal engine
 (``_engine.modal``) integrates exactly this form, whatever the model: out of contact by
 the exact flow of the linear system, in contact by RK4 in the frame of that flow. So the
-declaration is :func:`linear_system`: the matrices, from the modal quantities that
+declaration is :func:`modal_system`: the matrices, from the modal quantities that
 ``harvester_sweep.bimorph`` and ``harvester_sweep.rod`` compute; and the outputs the
 engine books are linear functionals of the state (:func:`outputs`).
 
@@ -63,7 +63,7 @@ def state(n_modes: int, rod_modes: int = 0) -> tuple:
     return tuple(comps)
 
 
-def linear_system(omega, zeta, chi, gamma, phi_tip, phi_contact, root_strain, capacitance,
+def modal_system(omega, zeta, chi, gamma, phi_tip, phi_contact, root_strain, capacitance,
                   resistance, gap, lower_gap=None, rod_omega=(), rod_zeta=0.0, rod_face=(),
                   rod_forcing=()) -> LinearSystem:
     """The beam as ``y' = M y + f a(t) + sum_s b_s F_s`` with its contact surfaces.

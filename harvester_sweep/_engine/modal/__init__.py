@@ -14,15 +14,15 @@ from pathlib import Path
 from ...models import hertz
 from .. import cache, hermite
 from . import kernel, layout
-from .kernel import SAMPLES, record, run_points
+from .kernel import SAMPLES, record_samples, settle_points
 from .layout import COMPLEX, HEAD, METRIC_HEAD, REAL, complex_fields, metric_size, real_fields
 
 _HERE = Path(__file__).parent
 SOURCE_DIGEST = cache.source_digest((_HERE, _HERE.parent / "hermite.py",
                                      _HERE.parent.parent / "models" / "hertz.py",
                                      _HERE.parent.parent / "jit.py"))
-cache.flush_if_changed(kernel.run_points, (kernel, layout), SOURCE_DIGEST)
+cache.flush_if_changed(kernel.settle_points, (kernel, layout), SOURCE_DIGEST)
 
 __all__ = ["COMPLEX", "HEAD", "METRIC_HEAD", "REAL", "SAMPLES", "SOURCE_DIGEST",
-           "complex_fields", "hermite", "hertz", "metric_size", "real_fields", "record",
-           "run_points"]
+           "complex_fields", "hermite", "hertz", "metric_size", "real_fields", "record_samples",
+           "settle_points"]

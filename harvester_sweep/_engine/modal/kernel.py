@@ -543,7 +543,7 @@ def run_point(c, r, z, metrics, ring, D, S, K):
 
 
 @njit(parallel=True, **JIT)
-def run_points(crows, rrows, z, metrics, strobes, D, S, K):
+def settle_points(crows, rrows, z, metrics, strobes, D, S, K):
     """Every point (complex rows (n, ...), real rows (n, ...), eigen-coordinates z (n, D),
     replaced by the end) to steady state: metrics (n, metric_size(K)), strobes
     (n, SAMPLES, D). Each point is run alone, so its numbers do not depend on the
@@ -553,7 +553,7 @@ def run_points(crows, rrows, z, metrics, strobes, D, S, K):
 
 
 @njit(**JIT)
-def record(c, r, z, periods, rec, D, S, K):
+def record_samples(c, r, z, periods, rec, D, S, K):
     """One point from z (modified) over ``periods`` forcing periods, every sample (grid
     times, contact sub-steps, switches) into rec (rows: time [s], each surface's force
     [N], each output); returns the rows recorded (at most len(rec))."""
