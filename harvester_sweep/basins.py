@@ -7,9 +7,11 @@ which one it reaches. Starts are drawn in one of two ways:
 - **a base shock** of a given size: the device runs on the orbit it reaches from rest, and
   at a moment drawn uniformly over that orbit the base's velocity jumps by ``shock``
   [m/s], up or down with equal odds. An impulse moves no mass, so the tip keeps its place
-  and its absolute velocity: its velocity relative to the base jumps by ``-shock`` or
-  ``+shock``, and the voltage is unchanged. The start is that state, at that moment's
-  forcing phase (the step boundary of the RK4 orbit the moment falls on).
+  and its velocity relative to the base jumps by ``-mu_1 shock`` or ``+mu_1 shock``, mu_1
+  the ``base_forcing_factor`` through which the base's acceleration, an impulse of it too,
+  forces the tip (mu_1 = 1, a lumped tip: it keeps its absolute velocity); the voltage is
+  unchanged. The start is that state, at that moment's forcing phase (the step boundary of
+  the RK4 orbit the moment falls on).
 
 Each start is solved to its steady state by the periodic-orbit solver (every start one
 point of the lane engine), and the starts are grouped by attractor: the same orbit period,
@@ -379,8 +381,9 @@ def _solve(spec: BasinSpec, progress) -> list:
                 halves = np.array([_box(p, spec.box) for p in chunk])
                 packed.states[:, :3] = (unit[None] * halves[:, None]).reshape(-1, 3)
             else:
+                factors = np.array([p["base_forcing_factor"] for p in chunk])
                 packed.rows[:, PARAM.phase], packed.states[:] = _shocked(one, when, sign,
-                                                                         shock)
+                                                                         shock, factors)
             results = solve(packed, samples=MAX_ORBIT_PERIOD, on_points=bar.update)
             for i in range(len(chunk)):
                 part = slice(i * samples, (i + 1) * samples)
@@ -388,10 +391,11 @@ def _solve(spec: BasinSpec, progress) -> list:
     return found
 
 
-def _shocked(one, when, sign, shock):
+def _shocked(one, when, sign, shock, factors):
     """Forcing phases [rad] (n * samples,) and states (n * samples, len(STATE)) a base shock
     leaves on the orbit each point of ``one`` reaches from rest (the state the motion
-    reached, where it reaches none)."""
+    reached, where it reaches none); ``factors`` (n,): each point's base_forcing_factor
+    mu_1 [-], by which the base's acceleration, the shock's too, forces the tip."""
     rest = solve(one, samples=MAX_ORBIT_PERIOD)
     phases, states = [], []
     for i, row in enumerate(one.rows):
@@ -404,7 +408,7 @@ def _shocked(one, when, sign, shock):
         state[:, STATE.stop_x] = orbit[step, SERIES.stop_displacement]
         state[:, STATE.stop_v] = orbit[step, SERIES.stop_velocity]
         # the velocities relative to the base: the tip's, and a moving stop's (0 if rigid)
-        state[:, STATE.v] -= sign * shock
+        state[:, STATE.v] -= sign * shock * factors[i]  # (a moving stop: mu_1 = 1)
         state[:, STATE.stop_v] -= np.where(row[PARAM.stop_ratio] > 0, sign * shock, 0.0)
         phases.append(2.0 * math.pi * (step % n) / n)
         states.append(state)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harvester_sweep import cli, resolve_parameters, run_scene, run_sweep
+from harvester_sweep import basin_fractions, cli, resolve_parameters, run_scene, run_sweep
 from harvester_sweep.linear import linear_response
 from harvester_sweep.parameters import ParameterError
 from tests.helpers import phasor
@@ -102,3 +102,17 @@ def test_a_sweep_over_the_factor_is_the_sweep_over_the_amplitude_bit_for_bit():
     assert (with_mu.impacts_per_period > 0).any() and (with_mu.impacts_per_period == 0).any()
     for name, variable in with_mu.data_vars.items():
         np.testing.assert_array_equal(variable.values, plain[name].values, err_msg=name)
+
+
+def test_a_base_shock_forces_the_tip_through_mu_too():
+    """A base shock is an impulse of the base's acceleration: with (mu_1, A, shock) the
+    starts, and so the basins, are those of (1, mu_1 A, mu_1 shock), bit for bit."""
+    band = {"gap": 0.25e-6 + 18 * 3.75e-6 / 63, "frequency": 100 + 61 * 150 / 63,
+            "steps_per_period": 1024}  # (tests/physics/test_basins.py: two orbits coexist)
+    mu, amplitude, shock = 1.25, 0.8, 0.024  # [-], [m/s^2], [m/s]
+    with_mu = basin_fractions(samples=16, shock=shock, base_forcing_factor=mu,
+                              amplitude=amplitude, **band)
+    plain = basin_fractions(samples=16, shock=mu * shock, amplitude=mu * amplitude, **band)
+    for name, variable in with_mu.data_vars.items():
+        np.testing.assert_array_equal(variable.values, plain[name].values, err_msg=name)
+    assert with_mu.sizes["attractor"] == 2  # (the starts do leave the orbit from rest)
