@@ -34,11 +34,17 @@ peak voltage, lam by the range), and the arclength is measured in them.
 - **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
   from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
   the period-p orbit along the eigenvector of the multiplier -1.
-- **Error.** Every point is corrected again at twice the steps per period (the coarse
-  Jacobian reused): at its own parameter value, the change of its metrics is its
+- **Error.** Every point is corrected again at twice its steps per period (its Jacobian
+  reused): at its own parameter value, the change of its metrics is its
   ``error_estimate`` (near a fold, where that orbit may not exist, it is taken normal to
-  the branch); normal to the branch, the change of the parameter is the point's shift,
-  at a fold the fold's.
+  the branch); normal to the branch, the change of the parameter is the point's shift.
+  A located bifurcation is located again at twice its steps, and the change of its
+  location is its shift (fold, period doubling, Neimark-Sacker and grazing alike).
+- **Accuracy.** The branch is followed at one step; where that step was chosen
+  automatically, a point whose estimate is above ``accuracy`` is solved again alone at
+  the step the fourth order asks for, as a sweep point (accuracy.refined_steps), and a
+  located bifurcation is located again at the step where its shift (relative to its
+  value) and its estimate meet ``accuracy``: each point reports its own steps per period.
 """
 
 from __future__ import annotations
@@ -120,7 +126,8 @@ class ContinuationSpec:
     start, stop : float
         The range, in the parameter's SI unit.
     steps : int
-        Steps per forcing period, kept along the whole branch.
+        Steps per forcing period the branch is followed at (a point may be refined to
+        more: ``accuracy``).
     step, min_step, max_step : float
         Initial, smallest and largest arclength step [-], relative to |stop - start|.
     max_points : int
@@ -359,8 +366,10 @@ def continue_branch(preset: str | None | ContinuationSpec = DEFAULTS["preset"],
         branch from each).
     **parameters
         Fixed values by name in SI units, as :func:`harvester_sweep.run_scene`. Without
-        ``steps_per_period``, the step is the one the accuracy target asks for at the most
-        demanding of STEP_SAMPLES values across the range, kept along the branch.
+        ``steps_per_period``, the branch is followed at the step the accuracy target asks
+        for at the most demanding of STEP_SAMPLES values across the range, and each point
+        and bifurcation whose estimate is above ``accuracy`` is solved again at a finer
+        step (its ``steps_per_period``); with it, every point stays at that step.
 
     Returns
     -------
