@@ -72,7 +72,14 @@ from .parameters import (
     is_number,
     resolve_parameters,
 )
-from .period_map import CENTRAL, PERTURBATION, ROUNDING, orbit_scales, state_size
+from .period_map import (
+    CENTRAL,
+    PERTURBATION,
+    ROUNDING,
+    orbit_scales,
+    sorted_multipliers,
+    state_size,
+)
 from .results import solve
 from .timescales import auto_steps_per_period
 
@@ -186,6 +193,9 @@ class _Point:
     shift: float = math.nan  # parameter change at twice the steps [parameter's unit]
     steps: int = 0  # steps per period of the orbit (the branch's, or refined: _refine)
     located: bool = False  # a bifurcation located to LOCATE (not the end of its step)
+    # |change| of each multiplier (sorted_multipliers' order) at twice the steps, located
+    # bifurcations only
+    multiplier_shift: np.ndarray = None
 
 
 @dataclass
@@ -821,7 +831,17 @@ def _accurate_bifurcation(problem: _Problem, point: _Point, accuracy: float,
         point, fine = finer, finer_fine
         _estimate(problem, point)
     point.shift = math.nan if fine is None else fine.lam - point.lam
+    if fine is not None:
+        point.multiplier_shift = _multiplier_shift(point.monodromy, fine.monodromy)
     return point
+
+
+def _multiplier_shift(coarse, fine) -> np.ndarray:
+    """|mu_fine - mu| [-] of each multiplier of monodromy ``coarse`` (in
+    sorted_multipliers' order), each paired with the nearest of ``fine``'s."""
+    mu = sorted_multipliers(coarse[None])[0]
+    other = np.linalg.eigvals(fine)
+    return np.abs(mu[:, None] - other[None, :]).min(axis=1)
 
 
 def _which_test(problem: _Problem, point: _Point) -> int:

@@ -181,8 +181,9 @@ def branch_dataset(branch, spec) -> xr.Dataset:
     continued parameter (named after it, in its unit), the engine's metrics but
     ``status`` and ``periods_run``, ``error_estimate``, the Floquet multipliers and
     ``spectral_radius``, ``stable``, ``bifurcation`` (CF flags), ``branch``,
-    ``arclength``, ``steps_per_period`` (each point's: refined where its estimate asked)
-    and the orbit's state at forcing phase 0; global attributes: the fixed
+    ``arclength``, ``steps_per_period`` (each point's: refined where its estimate asked),
+    ``floquet_multipliers_shift`` (at located bifurcations) and the orbit's state at
+    forcing phase 0; global attributes: the fixed
     parameters with their units, the continuation's range and options, why each branch
     ended and the run time [s].
     """
@@ -232,6 +233,16 @@ def branch_dataset(branch, spec) -> xr.Dataset:
                      "(its discretization error); elsewhere, corrected normal to the branch",
         "comment": "NaN where the correction or location at twice the steps did not "
                    "converge"})
+    change = np.full(mult.shape, np.nan)
+    for k, pt in enumerate(points):
+        if pt.multiplier_shift is not None:
+            change[k] = pt.multiplier_shift
+    data["floquet_multipliers_shift"] = (("point", "multiplier"), change, {
+        "units": "1",
+        "long_name": "change of each Floquet multiplier, |mu at twice the steps - mu|, when a "
+                     "located bifurcation is located again at twice its steps per period "
+                     "(its multipliers' discretization error)",
+        "comment": "NaN at points that are not located bifurcations"})
     data[f"{parameter}_precision"] = ("point", np.array([pt.precision for pt in points]), {
         "units": PARAMETERS[parameter].unit,
         "long_name": f"width of the bracket that locates a bifurcation in {parameter} "
