@@ -438,8 +438,8 @@ def _bifurcation_table(ds) -> str:
         lines.append("  none located")
     lines.append(f"  (bracket: width of the interval in {name} that holds it; 2x steps: the "
                  "change of its location when located again at twice its steps per period,")
-    lines.append("  its discretization error, nan where not located; steps: the steps per "
-                 "period it is located at)")
+    lines.append("  its discretization error, nan where its location failed; steps: the "
+                 "steps per period it is located at)")
     return "\n".join(lines)
 
 
