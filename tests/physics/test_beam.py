@@ -1,0 +1,160 @@
+"""The beam model run by the modal engine, against references written apart from it: the
+modal phasor sum without contact, the tip-mass model for one mode at the tip, and SciPy
+(DOP853, events at every switch of the contact force) on the same modal equations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from harvester_sweep import bimorph as bm
+from harvester_sweep import rod as rd
+from harvester_sweep import run_scene
+from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
+from harvester_sweep.beam_runs import solve_beam, system_of
+from harvester_sweep.models import beam as beam_model
+
+
+def _solve(preset="bimorph_tip", **overrides):
+    p = resolve_beam_parameters(preset, **overrides)
+    return p, solve_beam([p])
+
+
+@pytest.mark.parametrize("n_modes, position", [(5, None), (3, 0.6)])
+def test_without_contact_the_beam_is_its_modal_phasor_sum(n_modes, position):
+    """Clear of the stop the engine's flow is exact: the orbit is the modal phasor sum
+    (bimorph.modal_response, written from the modal equations apart from the engine)."""
+    over = dict(gap=1e-2, n_modes=n_modes, frequency=170.0)
+    if position is not None:
+        over["contact_position"] = position * resolve_beam_parameters()["length"]
+    p, sol = _solve(**over)
+    W, V = bm.modal_response(bimorph(p), p["frequency"], p["resistance"], n_modes=n_modes,
+                             damping_ratio=p["damping_ratio"], amplitude=p["amplitude"])
+    v = sol.values
+    assert v["status"][0] == 0 and v["impacts_per_period"][0] == 0
+    assert v["x_max"][0] == pytest.approx(abs(W), rel=1e-9)
+    assert v["x_min"][0] == pytest.approx(-abs(W), rel=1e-9)
+    assert v["v_peak"][0] == pytest.approx(abs(V), rel=1e-9)
+    assert v["power"][0] == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]), rel=1e-9)
+
+
+def test_one_mode_at_the_tip_is_the_tip_mass_model():
+    """The one-mode beam striking at its tip is the tip-mass model with the reduced
+    parameters (m_eq, k_eq, theta_eq, mu_1): the same linear system in x = phi_1(L) eta_1
+    to rounding, and the same orbit from the lane engine (another integrator: plain RK4
+    on x) within both runs' accuracy."""
+    p, sol = _solve(n_modes=1)
+    bs = system_of(p)
+    tip = float(bs.modes.tip[0])
+    eq = bm.reduction(bimorph(p))
+    lumped = beam_model.tip_mass_system(eq.mass, eq.stiffness, 2 * p["damping_ratio"]
+                                        * math.sqrt(eq.stiffness * eq.mass), eq.coupling,
+                                        eq.capacitance, p["resistance"], p["gap"],
+                                        eq.forcing_factor)
+    T = np.diag([tip, tip, 1.0])  # (x, v, V) = T (eta, eta', V)
+    Ti = np.linalg.inv(T)
+    np.testing.assert_allclose(T @ bs.system.matrix @ Ti, lumped.matrix, rtol=1e-12,
+                               atol=1e-12 * np.abs(lumped.matrix).max())
+    np.testing.assert_allclose(T @ bs.system.forcing, lumped.forcing, rtol=1e-12)
+    np.testing.assert_allclose(bs.system.surfaces @ Ti, lumped.surfaces, rtol=1e-12)
+    np.testing.assert_allclose(T @ bs.system.inputs[0], lumped.inputs[0], rtol=1e-12)
+    tip_mass = run_scene("paper", **bm.as_tip_mass_parameters(bimorph(p)))
+    v = sol.values
+    assert v["impacts_per_period"][0] == tip_mass.metrics["impacts_per_period"] == 1
+    for name in ("power", "v_peak", "x_max", "x_min", "approach_velocity"):
+        assert v[name][0] == pytest.approx(tip_mass.metrics[name], rel=2e-7), name
+
+
+def test_one_rod_mode_is_the_stop_on_a_spring():
+    """A rod in one mode is the lumped stop on a spring (rod.equivalent: m_s, k_s): the
+    same linear system in the stop's displacement x_s = psi_1(L_r) q_1, but for the base's
+    forcing, which a distributed rod feels as m_s (4/pi) A where a lumped mass feels m_s A."""
+    p = resolve_beam_parameters("mak_rod", n_modes=1, rod_modes=1)
+    bs = system_of(p)
+    face = float(bs.rod_modes.face[0])
+    eq = rd.equivalent(rd.Rod(p["rod_length"], p["rod_area"], p["rod_material"]))
+    M, q, rate = bs.system.matrix, 3, 4  # (eta, eta', V, q, q')
+    assert -M[rate, q] == pytest.approx(eq.stiffness / eq.mass, rel=1e-12)
+    assert bs.system.inputs[0][rate] * face == pytest.approx(1.0 / eq.mass, rel=1e-12)
+    assert bs.system.surfaces[0][q] == pytest.approx(-face, rel=1e-15)
+    assert bs.system.forcing[rate] * face == pytest.approx(4 / math.pi, rel=1e-12)
+
+
+def _reference_period(p, bs, y0, periods, rtol=1e-12):
+    """The modal equations y' = M y + f A sin(w t) + sum_s b_s F_s over ``periods`` forcing
+    periods from y0, by SciPy's DOP853 restarted at every switch of a surface's force
+    (touch, separation and the clip of the damping law): (end state, mean power [W])."""
+    sysm, A, w = bs.system, p["amplitude"], 2 * math.pi * p["frequency"]
+    kh, ch = p["hertz_stiffness"], bs.contact_damping
+    M, f, C, g, B = sysm.matrix, sysm.forcing, sysm.surfaces, sysm.gaps, sysm.inputs
+    volt = list(sysm.output_names).index("voltage")
+    out_v = sysm.outputs[volt]
+
+    def forces(y, on):
+        d = C @ y - g
+        r = C @ (M @ y)
+        return np.where(on, kh * np.maximum(d, 0) ** 1.5 * np.maximum(1 + ch * r, 0), 0.0)
+
+    def rhs(t, y, on):
+        yy = y[:-1]
+        dy = M @ yy + f * A * math.sin(w * t) + B.T @ forces(yy, on)
+        return np.append(dy, (out_v @ yy) ** 2)
+
+    def pushing(y):
+        d = C @ y - g
+        r = C @ (M @ y)
+        return (d > 0) & (1 + ch * r > 0)
+
+    t, T = 0.0, periods * 2 * math.pi / w
+    y = np.append(y0, 0.0)
+    on = pushing(y0)
+    atol = np.append(1e-13 * bs.scale, 1e-30)
+
+    def switch(tt, yy, on, s, kind):
+        r = C[s] @ (M @ yy[:-1])
+        return C[s] @ yy[:-1] - g[s] if kind == 0 else 1 + ch * r
+
+    events = []
+    for s in range(len(g)):
+        for kind in (0, 1):
+            def event(tt, yy, on, s=s, kind=kind):
+                return switch(tt, yy, on, s, kind)
+            event.terminal = True
+            events.append(event)
+    while t < T:
+        res = solve_ivp(rhs, (t, T), y, method="DOP853", rtol=rtol, atol=atol, events=events,
+                        args=(on,))
+        t, y = res.t[-1], res.y[:, -1]
+        if res.status == 1:
+            # which side of the switch the motion goes on to: one tiny Euler step ahead;
+            # then a step clear of the switch, where its event would fire again at once
+            # (the force is near zero there, so the step's own error is of rounding size)
+            nudge = 1e-10 * (T / periods)
+            on = pushing((y + nudge * rhs(t, y, on))[:-1])
+            step = solve_ivp(rhs, (t, min(t + nudge, T)), y, method="DOP853", rtol=rtol,
+                             atol=atol, args=(on,))
+            t, y = step.t[-1], step.y[:, -1]
+    return y[:-1], y[-1] / T / p["resistance"]
+
+
+@pytest.mark.parametrize("preset, overrides", [
+    ("bimorph_tip", dict(n_modes=3, contact_position=0.8 * 28.81e-3)),
+    ("mak_rod", dict(n_modes=2, rod_modes=2)),
+])
+def test_the_orbit_with_contact_is_an_orbit_of_the_equations(preset, overrides):
+    """The engine's steady state, run again by SciPy on the same modal equations from the
+    engine's own state at the period's start, comes back to that state after its period,
+    with the power the engine booked."""
+    p, sol = _solve(preset, **overrides)
+    bs = system_of(p)
+    v = sol.values
+    assert v["status"][0] == 0 and v["impacts_per_period"][0] >= 1
+    period = int(v["orbit_period"][0])
+    y0 = sol.ends[0]
+    y1, power = _reference_period(p, bs, y0, period)
+    scale = np.abs(y0).max()
+    assert np.abs(y1 - y0).max() <= 1e-5 * scale
+    assert power == pytest.approx(v["power"][0], rel=1e-5)
