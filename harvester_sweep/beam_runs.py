@@ -39,12 +39,20 @@ MAX_LEVELS = 5
 #: size; the extremes of displacement relative to the larger of them) [-].
 ESTIMATED = ("power", "v_peak", "x_max", "x_min", "root_strain_max")
 _SETTLED, _NOT_SETTLED, _DIVERGED = 0, 1, 2
+#: Periods of transient before Newton on the period map takes over [-].
+TRANSIENT = 24
+#: Newton iterations at the first step choice, chord iterations (the first level's
+#: monodromy reused) at each finer one [-].
+NEWTON = 8
+CHORD = 8
+#: Forward-difference step of the monodromy, relative to each component's scale [-].
+PERTURBATION = 1e-6
 #: The scalar outputs of a beam point, in the order of a solution's table.
 SCALARS = ("power", "v_rms", "v_peak", "power_peak", "x_max", "x_min",
            "contact_displacement_max", "contact_displacement_min", "contact_force_max",
            "impacts_per_period", "approach_velocity", "root_strain_max", "root_stress_piezo",
            "root_stress_substrate", "stop_face_max", "orbit_period", "status", "periods_run",
-           "error_estimate", "steps_per_period", "contact_step")
+           "error_estimate", "steps_per_period", "contact_step", "spectral_radius")
 
 
 @functools.lru_cache(maxsize=512)
@@ -138,36 +146,116 @@ def solve_beam(points: list, starts=None) -> BeamSolution:
     return BeamSolution(values, ends, strobes)
 
 
-def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
-    first = [first_steps(p, bs) for p, bs in zip(points, systems)]
-    if starts is None:
-        starts = [None] * len(points)
-    starts = [np.zeros(len(bs.system.matrix)) if s is None else np.asarray(s, dtype=float)
-              for bs, s in zip(systems, starts)]
-    linear = [s is None for s in starts]
-    del linear
+class _Group:
+    """Points of one state size solved level by level: their rows at a level, the period
+    map's fixed points by Newton, the orbit measured."""
 
-    def level(which, lv):
-        packs, begin = [], []
+    def __init__(self, points, systems, starts):
+        self.points, self.systems = points, systems
+        self.first = [first_steps(p, bs) for p, bs in zip(points, systems)]
+        self.starts = [np.zeros(len(bs.system.matrix)) if y is None
+                       else np.asarray(y, dtype=float) for bs, y in zip(systems, starts)]
+        self.scale = [bs.scale for bs in systems]
+
+    def packs(self, which, lv, budget=None):
+        out = []
         for k in which:
-            steps, sub = first[k]
-            pk = pack_beam(points[k], systems[k], steps * 2 ** lv, sub / 2 ** lv)
-            packs.append(pk)
-            begin.append(starts[k])
-        return packs, modal_map.run(packs, begin) if packs else None
+            steps, sub = self.first[k]
+            p = self.points[k] if budget is None else dict(self.points[k], max_periods=budget)
+            out.append(pack_beam(p, self.systems[k], steps * 2 ** lv, sub / 2 ** lv))
+        return out
 
-    todo = list(range(len(points)))
-    coarse = {}
-    packs, (m, e, s) = level(todo, 0)
-    for j, k in enumerate(todo):
-        coarse[k] = (_table(points[k], systems[k], m[j]), e[j], s[j], 0)
+    def jacobians(self, packs, which, states, periods):
+        """The monodromy of P^p at each state by forward differences (D + 1 runs)."""
+        D = len(states[0])
+        reps = [pk for pk in packs for _ in range(D + 1)]
+        moved, steps = [], []
+        for j, k in enumerate(which):
+            h = PERTURBATION * self.scale[k]
+            moved.append(states[j])
+            moved.extend(states[j] + np.diag(h))
+            steps.append(h)
+        ends, ok = modal_map.map_states(reps, moved, np.repeat(periods, D + 1))
+        ends = ends.reshape(len(which), D + 1, D)
+        ok = ok.reshape(len(which), D + 1).all(axis=1)
+        jac = (ends[:, 1:] - ends[:, :1]).transpose(0, 2, 1) / np.array(steps)[:, None, :]
+        return jac, ends[:, 0], ok
+
+    def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON):
+        """Fixed points of P^p from ``states`` (len(which), D): full Newton with
+        finite-difference monodromies, or chord steps with ``jac`` where given. Returns
+        (states, monodromies, converged)."""
+        states = np.array(states, dtype=float)
+        n, D = states.shape
+        conv = np.zeros(n, dtype=bool)
+        jacs = np.full((n, D, D), np.nan) if jac is None else np.array(jac)
+        tol = np.array([self.points[k]["settle_tolerance"] for k in which])
+        scale = np.array([self.scale[k] for k in which])
+        live = np.isfinite(jacs).all(axis=(1, 2)) if jac is not None else np.ones(n, bool)
+        for _ in range(rounds):
+            idx = np.flatnonzero(live & ~conv)
+            if not len(idx):
+                break
+            sub_packs = [packs[j] for j in idx]
+            if jac is None:
+                J, image, ok = self.jacobians(sub_packs, [which[j] for j in idx],
+                                              states[idx], periods[idx])
+                jacs[idx] = J
+            else:
+                image, ok = modal_map.map_states(sub_packs, states[idx], periods[idx])
+                J = jacs[idx]
+            residual = image - states[idx]
+            small = np.abs(residual / scale[idx]).max(axis=1) <= tol[idx]
+            conv[idx[small & ok]] = True
+            live[idx[~ok]] = False
+            step = idx[~small & ok]
+            if len(step):
+                pick = np.isin(idx, step)
+                delta = np.linalg.solve(J[pick] - np.eye(D), -residual[pick][..., None])[..., 0]
+                states[step] += delta
+        return states, jacs, conv
+
+    def measure(self, which, lv, states):
+        """The orbits from their fixed points: settled again by the engine's own test (a
+        few periods) and measured."""
+        return modal_map.run(self.packs(which, lv), states)
+
+
+def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
+    g = _Group(points, systems, [None] * len(points) if starts is None else starts)
+    n = len(points)
+    todo = list(range(n))
+    # level 0: a short transient, then Newton on the period map of the orbit's period
+    short = [min(TRANSIENT, p["max_periods"]) for p in points]
+    m, e, _ = modal_map.run(g.packs(todo, 0, budget=max(short)), g.starts)
+    transient = m[:, HEAD.periods_run]
+    period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1), 1)
+    period = period.astype(np.int64)
+    packs0 = g.packs(todo, 0)
+    orbit, jac, conv = g.newton(packs0, todo, e, period)
+    # where Newton did not converge: the whole budget of transient, from where it stopped
+    lost = np.flatnonzero(~conv)
+    states = orbit.copy()
+    if len(lost):
+        states[lost] = e[lost]
+    m, e, s = g.measure(todo, 0, states)
+    coarse = {k: (_table(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
+    periods_run = {k: transient[k] + m[k, HEAD.periods_run] for k in todo}
     done = {}
     lv = 1
     while todo and lv <= MAX_LEVELS:
-        packs, (m, e, s) = level(todo, lv)
+        packs = g.packs(todo, lv)
+        start = np.array([coarse[k][1] for k in todo])
+        per = np.array([max(int(coarse[k][0][0]["orbit_period"]), 1) for k in todo],
+                       dtype=np.int64)
+        # (the first level's monodromies serve the chord steps of every level)
+        orbit, _, conv_l = g.newton(packs, todo, start, per, jac=jac[todo], rounds=CHORD)
+        states = np.where(conv_l[:, None], orbit, start)
+        m, e, s = modal_map.run(packs, states)
         nxt = []
         for j, k in enumerate(todo):
             fine = (_table(points[k], systems[k], m[j]), e[j], s[j], lv)
+            periods_run[k] += m[j, HEAD.periods_run]
             est = _change(coarse[k][0][0], fine[0][0])
             if est <= points[k]["accuracy"] or not math.isfinite(est) or lv == MAX_LEVELS:
                 done[k] = fine, est
@@ -175,15 +263,18 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
                 coarse[k] = fine
                 nxt.append(k)
         todo, lv = nxt, lv + 1
-    for k, ((table, amp), end, strobe, lv_k), est in (
-            (k, *done[k]) for k in range(len(points))):
+    for k in range(n):
+        ((table, amp), end, strobe, lv_k), est = done[k]
         i = idx[k]
         for name, v in table.items():
             values[name][i] = v
         values["error_estimate"][i] = est
-        steps, sub = first[k]
+        values["periods_run"][i] = periods_run[k]
+        steps, sub = g.first[k]
         values["steps_per_period"][i] = steps * 2 ** lv_k
         values["contact_step"][i] = sub / 2 ** lv_k
+        rho = np.abs(np.linalg.eigvals(jac[k])).max() if np.isfinite(jac[k]).all() else np.nan
+        values["spectral_radius"][i] = rho
         modal[i], ends[i], strobes[i] = amp, end, strobe
 
 

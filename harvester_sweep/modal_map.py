@@ -116,6 +116,18 @@ def run(packs, starts) -> tuple:
     return metrics, ends, strobes
 
 
+def map_states(packs, states, periods) -> tuple:
+    """The period map: each state (n, D) at phase 0 after ``periods`` (n,) forcing periods
+    of its point (``packs``, one model's dimensions). Returns (end states (n, D), ok (n,):
+    False where the run diverged)."""
+    D, S, K = packs[0].dims
+    z = np.array([pk.to_modal(y) for pk, y in zip(packs, states)], dtype=complex)
+    ok = np.empty(len(packs), dtype=bool)
+    modal.map_points(np.array([pk.crow for pk in packs]), np.array([pk.rrow for pk in packs]),
+                     z, np.asarray(periods, dtype=np.int64), ok, D, S, K)
+    return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok
+
+
 def record_motion(packed: ModalPoint, start, periods: int, rows: int) -> np.ndarray:
     """Every sample of ``periods`` forcing periods from state ``start`` (D,) at phase 0,
     at most ``rows``: (n, 1 + S + K) with time [s], each surface's force [N], each

@@ -569,3 +569,22 @@ def record_samples(c, r, z, periods, rec, D, S, K):
                           pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
                           volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
     return n
+
+
+@njit(parallel=True, **JIT)
+def map_points(crows, rrows, z, periods, ok, D, S, K):
+    """The period map: every point (rows as settle_points) from z (n, D), replaced by its
+    state after periods[i] forcing periods; ok[i] is False where the run diverged."""
+    for i in prange(crows.shape[0]):
+        (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
+         strobe, y_p, scale) = _tables(crows[i], rrows[i], D, S, K)
+        r = rrows[i]
+        omega, steps, substep, limit, volt = r[0], int(r[1]), r[2], r[5], int(r[7])
+        st = _start(z[i], omega, pen, pen_p, pl, gap, ch, D, S)
+        acc = np.zeros(len(HEAD) + 2 * K)
+        buf = np.zeros((SAMPLES, D))
+        _, status, _, _ = _advance(z[i], st, periods[i], False, np.empty((0, 1)), -1, omega,
+                                   2.0 * math.pi / omega, steps, substep, lam, grid, pen, pl,
+                                   pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
+                                   volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
+        ok[i] = status != DIVERGED
