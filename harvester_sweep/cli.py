@@ -55,10 +55,49 @@ def _parser() -> argparse.ArgumentParser:
     scene.add_argument("--output", metavar="FILE.nc",
                        help="write the last orbit periods and the metrics to netCDF")
 
-    sub.add_parser("parameters", help="list the parameters, their units, ranges and presets",
-                   description="Print every parameter with its SI unit, allowed range and "
-                   "meaning, then each preset's value of every parameter (the names --set, "
-                   "sweep files and output files use).")
+    listing = sub.add_parser(
+        "parameters", help="list the parameters, their units, ranges and presets",
+        description="Print every parameter with its SI unit, allowed range and meaning, then "
+        "each preset's value of every parameter (the names --set, sweep files and output "
+        "files use).")
+    listing.add_argument("--model", default="tip_mass", choices=("tip_mass", "beam"),
+                         help="the tip-mass model (default; 'scene', 'run', 'continue', "
+                         "'basins') or the beam ('beam-scene', 'beam-sweep')")
+
+    beam_scene = sub.add_parser(
+        "beam-scene", help="run one point of the beam model to steady state",
+        description="Run one point of the beam model (a bimorph in n_modes bending modes "
+        "striking a rigid or rod stop; a preset with --set overrides, SI units) to its "
+        "periodic orbit and print its outputs as a table or JSON; optionally write the "
+        "orbit's time history to netCDF.")
+    _beam_common(beam_scene)
+    beam_scene.add_argument("--periods", type=int, default=2, metavar="N",
+                            help="forcing periods of the orbit to record with --output "
+                            "(default: 2)")
+    beam_scene.add_argument("--json", action="store_true",
+                            help="print the outputs as one JSON object on stdout")
+    beam_scene.add_argument("--output", "--out", dest="output", metavar="FILE.nc",
+                            help="write the orbit's time history to netCDF")
+
+    beam_sweep = sub.add_parser(
+        "beam-sweep", help="steady states of the beam model over a grid, into netCDF",
+        description="Solve the beam model at every point of a grid (one --axis per swept "
+        "parameter) and write the CF dataset. With --direction, each line along frequency "
+        "is swept in that direction, every point starting from the previous one's orbit "
+        "(the stop's hysteresis).")
+    _beam_common(beam_sweep)
+    beam_sweep.add_argument("--axis", dest="axes", action="append", default=[], required=True,
+                            metavar="NAME=SPEC",
+                            help="a grid axis: NAME=START:STOP:COUNT (evenly spaced, ends "
+                            "included) or NAME=V1,V2,... (repeatable), e.g. "
+                            "--axis frequency=120:170:26")
+    beam_sweep.add_argument("--direction", choices=("up", "down", "both"),
+                            help="sweep each frequency line up, down or both ways (needs a "
+                            "frequency axis; default: every point from its linear steady "
+                            "state)")
+    beam_sweep.add_argument("--output", "--out", dest="output", required=True,
+                            metavar="OUT.nc", help="netCDF file to write")
+    beam_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
 
     run = sub.add_parser("run", help="run a sweep file (TOML) into a netCDF dataset",
                          description="Run every point of a sweep file to steady state and write "
@@ -156,7 +195,11 @@ def _main(args) -> int:
     _WRITTEN.clear()
     try:
         if args.command == "parameters":
-            return _print_parameters()
+            return _print_parameters(args.model)
+        if args.command == "beam-scene":
+            return _beam_scene(args)
+        if args.command == "beam-sweep":
+            return _beam_sweep(args)
         if args.command == "plot":
             return _plot(args)
         if args.command == "run":
@@ -488,6 +531,10 @@ def _check_written_here(path: str, ds) -> None:
     """Refuse a netCDF file this tool did not write: every file it writes has a title
     "harvester_sweep ..." (datasets.py), and the plots read its variables and attributes
     by name."""
+    if ds.attrs.get("model") == "beam":
+        raise ParameterError(f"{path}: a file of the beam model (beam-scene, beam-sweep): "
+                             "plot does not draw the beam yet; its outputs are the file's "
+                             "variables (docs/guide.md, 'The beam model')")
     title = ds.attrs.get("title")
     if not (isinstance(title, str) and title.startswith("harvester_sweep ")):
         raise ParameterError(f"{path}: not a file written by harvester-sweep (its title "
@@ -571,10 +618,338 @@ def _table(result, preset: str) -> str:
     return "\n".join(lines)
 
 
-def _print_parameters() -> int:
+def _beam_common(parser) -> None:
+    """The options every beam command takes: its preset and --set overrides (checked by
+    beam_parameters, not by argparse: importing it for the choices would slow every
+    command)."""
+    parser.add_argument("--preset", default=None, metavar="NAME",
+                        help="starting parameter set: bimorph_tip (default) or mak_rod (see "
+                        "'harvester-sweep parameters --model beam')")
+    parser.add_argument("--set", dest="assignments", action="append", default=[],
+                        metavar="NAME=VALUE",
+                        help="override a beam parameter in SI units, e.g. --set n_modes=3 "
+                        "(repeatable)")
+
+
+def _beam_assignment(text: str) -> tuple[str, object]:
+    """``NAME=VALUE`` of a beam parameter, typed and refused as parse_assignment does for
+    the tip-mass model (which parses the parameters the two models share)."""
+    name, sep, raw = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise ParameterError(f"--set {text!r}: expected NAME=VALUE, e.g. --set n_modes=3")
+    spec = _beam_spec(name)
+    if PARAMETERS.get(name) is spec:
+        return parse_assignment(text)
+    raw = raw.strip()
+    if spec.kind in ("choice", "bool"):
+        return name, raw
+    if spec.optional and raw.lower() in ("", "none"):
+        return name, None
+    return name, _beam_number(spec, raw)
+
+
+def _beam_spec(name: str):
+    from .beam_parameters import BEAM_PARAMETERS
+
+    if name not in BEAM_PARAMETERS:
+        raise ParameterError(f"unknown beam parameter {name!r}: known parameters are "
+                             + ", ".join(BEAM_PARAMETERS))
+    return BEAM_PARAMETERS[name]
+
+
+def _beam_number(spec, raw: str):
+    """The number ``raw`` of parameter ``spec``, or one line naming it, its unit and
+    range."""
+    try:
+        number = float(raw)
+    except ValueError:
+        unit = f" [{'-' if spec.unit == '1' else spec.unit}]"
+        raise ParameterError(f"{spec.name}{unit} = {raw.strip()!r} is not a number: must be "
+                             f"{spec.range_text()}") from None
+    return int(number) if spec.kind == "int" and number.is_integer() else number
+
+
+def _beam_axis(text: str) -> tuple[str, np.ndarray]:
+    """``NAME=START:STOP:COUNT`` (evenly spaced, both ends included) or
+    ``NAME=V1,V2,...`` from --axis, each value checked against the parameter's range."""
+    name, sep, raw = text.partition("=")
+    name, raw = name.strip(), raw.strip()
+    if not sep or not name or not raw:
+        raise ParameterError(f"--axis {text!r}: expected NAME=START:STOP:COUNT or "
+                             "NAME=V1,V2,..., e.g. --axis frequency=120:170:26")
+    spec = _beam_spec(name)
+    if spec.kind in ("choice", "bool"):
+        raise ParameterError(f"--axis {name}: a sweep axis takes numbers, and {name} is "
+                             f"{spec.range_text()}: give it with --set")
+    if ":" in raw:
+        parts = raw.split(":")
+        if len(parts) != 3:
+            raise ParameterError(f"--axis {text!r}: expected NAME=START:STOP:COUNT, e.g. "
+                                 "--axis frequency=120:170:26")
+        start, stop = (_beam_number(spec, part) for part in parts[:2])
+        try:
+            count = int(parts[2])
+        except ValueError:
+            count = 0
+        if count < 1:
+            raise ParameterError(f"--axis {name}: COUNT = {parts[2].strip()!r}: must be a whole "
+                                 "number of points, at least 1")
+        values = list(np.linspace(start, stop, count))
+    else:
+        values = [_beam_number(spec, part) for part in raw.split(",")]
+    values = [spec.check(v) for v in values]  # (one line: name, unit, range)
+    return name, np.array(values)
+
+
+def _beam_overrides(args) -> dict:
+    """The --set overrides of a beam command, checked with its preset (bad input: one
+    line, exit 2, before anything runs)."""
+    from .beam_parameters import resolve_beam_parameters
+
+    overrides = dict(_beam_assignment(text) for text in args.assignments)
+    resolve_beam_parameters(args.preset, **overrides)
+    return overrides
+
+
+def _announce_beam_compilation() -> None:
+    """Say so where the beam's modal engine (cached apart from the tip-mass model's) is
+    not in numba's on-disk cache: its first run compiles it."""
+    try:
+        from ._engine import cache
+        from ._engine.modal import kernel
+
+        warm = cache.is_warm(kernel.settle_points)
+    except (ImportError, AttributeError):  # (the engine's layout changed: say nothing)
+        return
+    if not warm:
+        print("harvester-sweep: compiling the beam's modal engine into numba's on-disk "
+              "cache (first run only, about a minute)", file=sys.stderr, flush=True)
+
+
+#: The beam's outputs shown as whole numbers.
+_BEAM_COUNTS = ("orbit_period", "periods_run", "steps_per_period")
+
+
+def _beam_scene(args) -> int:
+    from .beam_parameters import DEFAULT_BEAM_PRESET, resolve_beam_parameters
+    from .beam_runs import beam_scene
+    from .outputs import STATUSES
+
+    if args.output is not None:
+        _check_output(args.output, (".nc",))
+    if not 1 <= args.periods <= 1000:
+        raise ParameterError(f"--periods = {args.periods}: must be an integer in [1, 1000]")
+    overrides = dict(_beam_assignment(text) for text in args.assignments)
+    p = resolve_beam_parameters(args.preset, **overrides)
+    preset = args.preset or DEFAULT_BEAM_PRESET
+    _announce_beam_compilation()
+    outputs, series = beam_scene(preset, periods=args.periods, **overrides)
+    rows = _beam_rows(outputs, p)
+    status = {s.code: s.name for s in STATUSES}.get(int(outputs["status"]), "unknown")
+    if args.json:
+        record = {name: value for name, value, _, _ in rows}
+        record["status"] = status
+        print(json.dumps(record))
+    else:
+        print(_beam_table(rows, p, preset, status))
+    if status == "diverged":
+        print(f"harvester-sweep: the integration diverged after {int(outputs['periods_run'])} "
+              "periods: no outputs are reported. Raise steps_per_period or lower "
+              "contact_step.", file=sys.stderr)
+        return EXIT_DIVERGED
+    if status == "not settled":
+        print(f"harvester-sweep: warning: no steady state within max_periods = "
+              f"{p['max_periods']}: the outputs are over the last periods run", file=sys.stderr)
+    if args.output:
+        with _writing(args.output):
+            from .datasets import write_netcdf
+
+            write_netcdf(_beam_series(series, outputs, p, preset), args.output)
+    return 0
+
+
+def _beam_rows(outputs: dict, p: dict) -> list:
+    """(name, value for JSON, unit, long_name) of each output of a beam point; one row per
+    mode of ``modal_amplitude``; ``stop_face_max`` left out with a rigid stop; NaN as
+    None."""
+    from .outputs import OUTPUTS
+
+    def plain(name, value):
+        value = float(value)
+        if not np.isfinite(value):
+            return None
+        return int(value) if name in _BEAM_COUNTS else value
+
+    rows = []
+    for name, value in outputs.items():
+        if name == "status" or (name == "stop_face_max" and p["rod_modes"] == 0):
+            continue
+        output = OUTPUTS.get(name)
+        unit, long_name = (output.units, output.long_name) if output else ("", "")
+        if name == "modal_amplitude":
+            rows.append((name, [plain(name, v) for v in np.ravel(value)], unit, long_name))
+        else:
+            rows.append((name, plain(name, value), unit, long_name))
+    return rows
+
+
+def _beam_table(rows: list, p: dict, preset: str, status: str) -> str:
+    """A beam point's outputs as a table, lengths in micrometres as in the other tables."""
+    from .beam_parameters import BEAM_PRESET_NOTES
+
+    stop = ("a rigid stop" if p["rod_modes"] == 0
+            else f"a rod stop in {p['rod_modes']} modes")
+    lines = [f"beam scene '{preset}': {p['n_modes']} bending modes striking {stop} at "
+             f"{p['contact_position'] / p['length']:.3g} L, gap = {p['gap'] / 1e-6:g} {_UM}, "
+             f"frequency = {p['frequency']:g} Hz, amplitude = {p['amplitude']:g} m/s^2, "
+             f"resistance = {p['resistance']:g} ohm"]
+    lines += [f"  note: {note}" for note in BEAM_PRESET_NOTES.get(preset, [])]
+    lines.append("")
+
+    def text(value, scale):
+        if value is None:
+            return "nan"
+        return str(value) if isinstance(value, int) else f"{value / scale:.6g}"
+
+    shown = []
+    for name, value, unit, long_name in rows:
+        scale = 1e-6 if unit == "m" else 1.0
+        unit = _UM if unit == "m" else "" if unit == "1" else unit
+        if name == "modal_amplitude":
+            shown += [(f"{name}[{r}]", text(v, scale), unit, f"{long_name} (mode {r})")
+                      for r, v in enumerate(value, 1)]
+        else:
+            shown.append((name, text(value, scale), unit, long_name))
+    shown.append(("status", status, "", ""))
+    name_w, value_w, unit_w = (max(len(row[k]) for row in shown) for k in range(3))
+    lines.append(f"  {'output':<{name_w}} {'value':>{value_w}}  unit")
+    lines += [f"  {name:<{name_w}} {value:>{value_w}}  {unit:<{unit_w}} {long_name}".rstrip()
+              for name, value, unit, long_name in shown]
+    return "\n".join(lines)
+
+
+def _beam_series(series, outputs: dict, p: dict, preset: str):
+    """The time history of beam_scene with what the file needs to stand alone: its
+    outputs (CF attributes from outputs.OUTPUTS), preset and parameters, where beam_scene
+    did not put them there itself."""
+    from .outputs import OUTPUTS, STATUS_FLAGS
+
+    ds = series.copy()
+    for name, value in outputs.items():
+        if name in ds or name not in OUTPUTS:
+            continue
+        if name == "stop_face_max" and p["rod_modes"] == 0:
+            continue  # (a metric the model does not have is absent, not NaN)
+        if name == "modal_amplitude":
+            values = np.ravel(value)
+            ds[name] = ("mode", values, OUTPUTS[name].attrs)
+            if "mode" not in ds.coords:
+                ds = ds.assign_coords(mode=("mode", np.arange(1, len(values) + 1),
+                                            {"units": "1", "long_name": "bending mode number"}))
+        elif name == "status":
+            ds[name] = ((), np.int8(value), {**OUTPUTS[name].attrs, **STATUS_FLAGS})
+        elif name in _BEAM_COUNTS and np.isfinite(value):
+            ds[name] = ((), np.int64(value), OUTPUTS[name].attrs)
+        else:
+            ds[name] = ((), float(value), OUTPUTS[name].attrs)
+    defaults = {"title": "harvester_sweep: a beam orbit's time history", "model": "beam",
+                "Conventions": "CF-1.8", "preset": preset}
+    defaults.update({f"parameter_{name}": value if not isinstance(value, bool) else int(value)
+                     for name, value in p.items() if value is not None})
+    for key, value in defaults.items():
+        ds.attrs.setdefault(key, value)
+    return ds
+
+
+def _beam_sweep(args) -> int:
+    from .beam_parameters import DEFAULT_BEAM_PRESET
+    from .beam_runs import beam_sweep
+    from .datasets import write_netcdf
+    from .outputs import STATUSES
+
+    _check_output(args.output, (".nc",))
+    overrides = _beam_overrides(args)
+    axes = {}
+    for text in args.axes:
+        name, values = _beam_axis(text)
+        if name in axes:
+            raise ParameterError(f"--axis {name}: given twice")
+        if name in overrides:
+            raise ParameterError(f"{name}: both on an --axis and in --set")
+        axes[name] = values
+    directions = {None: None, "up": ("up",), "down": ("down",),
+                  "both": ("up", "down")}[args.direction]
+    if directions and "frequency" not in axes:
+        raise ParameterError("--direction: a sweep up or down needs a frequency axis "
+                             "(--axis frequency=START:STOP:COUNT)")
+    preset = args.preset or DEFAULT_BEAM_PRESET
+    # (every point checked before any is solved: bad input is one line, exit 2)
+    from .beam_runs import points_of
+
+    points_of(preset, overrides, axes)
+    _announce_beam_compilation()
+    start = time.perf_counter()
+    with _beam_progress(axes, directions, quiet=args.quiet):
+        ds = beam_sweep(axes, preset, directions=directions, **overrides)
+    seconds = time.perf_counter() - start
+    with _writing(args.output):
+        write_netcdf(ds, args.output)
+    counts = {s.name: int((ds["status"] == s.code).sum()) for s in STATUSES}
+    for s in reversed(STATUSES[1:]):  # the worst first
+        if counts[s.name]:
+            print(f"harvester-sweep: warning: {counts[s.name]} of {ds['status'].size} points "
+                  f"{s.name} (status = {s.code}): {s.meaning}", file=sys.stderr)
+    if not args.quiet:
+        print(f"harvester-sweep: {ds['status'].size} points ({counts['settled']} settled) in "
+              f"{seconds:.3g} s: {args.output}", file=sys.stderr)
+    return 0
+
+
+@contextlib.contextmanager
+def _beam_progress(axes: dict, directions, quiet: bool):
+    """One line on stderr per frequency step of a swept sweep (or per batch of points
+    otherwise) while beam_sweep runs: beam_runs has no progress hook, so its solve_beam
+    is wrapped for the call (each call is one step of every line)."""
+    from . import beam_runs
+
+    solve = beam_runs.solve_beam
+    steps = len(axes["frequency"]) if directions else None
+    calls = []
+
+    def counted(points, starts=None):
+        begun = time.perf_counter()
+        solution = solve(points, starts)
+        calls.append(None)
+        if steps:
+            direction = directions[min((len(calls) - 1) // steps, len(directions) - 1)]
+            step = (len(calls) - 1) % steps + 1
+            print(f"harvester-sweep: {direction} {step}/{steps}: frequency = "
+                  f"{points[0]['frequency']:g} Hz, {len(points)} line(s) in "
+                  f"{time.perf_counter() - begun:.2g} s", file=sys.stderr, flush=True)
+        else:
+            print(f"harvester-sweep: {len(points)} point(s) in "
+                  f"{time.perf_counter() - begun:.2g} s", file=sys.stderr, flush=True)
+        return solution
+
+    if not quiet:
+        beam_runs.solve_beam = counted
+    try:
+        yield
+    finally:
+        beam_runs.solve_beam = solve
+
+
+def _print_parameters(model: str = "tip_mass") -> int:
     """Two tables, their columns as wide as their longest entries: the parameters (unit,
-    range, meaning), then every preset's value of each, none left out."""
-    specs = list(PARAMETERS.values())
+    range, meaning) of ``model`` ("tip_mass" or "beam"), then every preset's value of
+    each, none left out."""
+    registry, presets = PARAMETERS, PRESETS
+    if model == "beam":
+        from .beam_parameters import BEAM_PARAMETER_PRESETS, BEAM_PARAMETERS
+
+        registry, presets = BEAM_PARAMETERS, BEAM_PARAMETER_PRESETS
+    specs = list(registry.values())
     rows = [("name", "unit", "allowed", "description")] + [
         (s.name, "-" if s.unit == "1" else s.unit, s.range_text(), s.description) for s in specs]
     print(_columns(rows))
@@ -587,9 +962,9 @@ def _print_parameters() -> int:
             return str(value).lower()
         return f"{value:g}" if isinstance(value, float) else str(value)
 
-    rows = [("preset values", "unit", *PRESETS)] + [
+    rows = [("preset values", "unit", *presets)] + [
         (s.name, "-" if s.unit == "1" else s.unit,
-         *(shown(values.get(s.name)) for values in PRESETS.values())) for s in specs]
+         *(shown(values.get(s.name)) for values in presets.values())) for s in specs]
     print(_columns(rows))
     return 0
 
