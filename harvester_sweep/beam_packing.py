@@ -14,7 +14,7 @@ import numpy as np
 
 from . import bimorph as _bimorph
 from . import rod as _rod
-from .beam_parameters import bimorph, rod
+from .beam_parameters import bimorph, contact_position, rod
 from .contact import contact_damping
 from .modal_map import ModalPoint, pack
 from .models import beam as beam_model
@@ -54,7 +54,7 @@ def beam_system(p: dict) -> BeamSystem:
     system = beam_model.modal_system(
         omega=modes.omega, zeta=np.full(n, p["damping_ratio"]), chi=modes.coupling,
         gamma=modes.forcing, phi_tip=modes.tip,
-        phi_contact=modes.shape(p["contact_position"])[:, 0], root_strain=strain,
+        phi_contact=modes.shape(contact_position(p))[:, 0], root_strain=strain,
         capacitance=beam.capacitance, resistance=p["resistance"], gap=p["gap"],
         lower_gap=p["lower_gap"], rod_omega=() if rm is None else rm.omega,
         rod_zeta=p["rod_damping_ratio"], rod_face=() if rm is None else rm.face,

@@ -39,8 +39,8 @@ BEAM_PARAMETERS: dict[str, Parameter] = {
         _P("connection", "1", "how the two piezo layers feed the load", kind="choice",
            choices=CONNECTIONS),
         _P("n_modes", "1", "bending modes of the beam", kind="int", low=1, high=MAX_MODES),
-        _P("contact_position", "m", "span position s_c of the contact from the clamp "
-           "(0 < s_c <= length)", low=0, low_open=True),
+        _P("contact_position", "m", "span position s_c of the contact from the clamp, at "
+           "most the length (unset: the tip)", low=0, low_open=True, optional=True),
         _P("rod_modes", "1", "longitudinal modes of a rod stop (0: a rigid stop)", kind="int",
            low=0, high=MAX_ROD_MODES),
         _P("rod_length", "m", "length of the rod stop", low=0, low_open=True),
@@ -76,7 +76,8 @@ def _preset(name: str) -> MappingProxyType:
                   substrate_thickness=beam.substrate_thickness,
                   piezo_thickness=beam.piezo_thickness, substrate=beam.substrate,
                   piezo=beam.piezo, tip_mass=beam.tip_mass, tip_inertia=beam.tip_inertia,
-                  connection=beam.connection, contact_position=position,
+                  connection=beam.connection,
+                  contact_position=None if position == beam.length else position,
                   rod_modes=0 if rod is None else 5,
                   rod_length=40e-3 if rod is None else rod.length,
                   rod_area=2e-5 if rod is None else rod.area,
@@ -114,7 +115,8 @@ def resolve_beam_parameters(preset: str | None = DEFAULT_BEAM_PRESET, **override
     p = dict(BEAM_PARAMETER_PRESETS[preset])
     p.update(overrides)
     checked = {name: BEAM_PARAMETERS[name].check(p[name]) for name in BEAM_PARAMETERS}
-    if checked["contact_position"] > checked["length"]:
+    if checked["contact_position"] is not None \
+            and checked["contact_position"] > checked["length"]:
         raise ParameterError(
             f"contact_position [m] = {value_text(checked['contact_position'])}: must be in "
             f"(0, length = {checked['length']:g} m]")
@@ -128,6 +130,12 @@ def resolve_beam_parameters(preset: str | None = DEFAULT_BEAM_PRESET, **override
     except ValueError as error:
         raise ParameterError(str(error)) from None
     return checked
+
+
+def contact_position(p: dict) -> float:
+    """The contact's span position s_c [m] of a validated parameter set (unset: the
+    tip)."""
+    return p["length"] if p["contact_position"] is None else p["contact_position"]
 
 
 def bimorph(p: dict) -> Bimorph:

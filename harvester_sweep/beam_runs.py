@@ -30,7 +30,7 @@ from .beam_parameters import (
 from .models import beam as beam_model
 from .outputs import OUTPUTS, STATUS_FLAGS
 from .parameters import ParameterError
-from .version import version
+from .version import __version__
 
 #: Halvings of the grid and the contact sub-step the accuracy check may take beyond the
 #: first choice [-].
@@ -47,6 +47,9 @@ NEWTON = 8
 CHORD = 8
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
+#: A fixed point whose monodromy's spectral radius exceeds this is unstable: not the
+#: motion's steady state (the margin: the forward-difference monodromy's error) [-].
+UNSTABLE = 1.0 + 1e-3
 #: The scalar outputs of a beam point, in the order of a solution's table.
 SCALARS = ("power", "v_rms", "v_peak", "power_peak", "x_max", "x_min",
            "contact_displacement_max", "contact_displacement_min", "contact_force_max",
@@ -125,8 +128,12 @@ def _change(a: dict, b: dict) -> float:
 
 def solve_beam(points: list, starts=None) -> BeamSolution:
     """Each validated beam parameter set of ``points`` to steady state from ``starts``
-    ((n, D) states at phase 0; None: each point's linear steady state), at the step that
-    meets its ``accuracy``. Points of different state sizes are solved in groups."""
+    ((n, D) states at phase 0; None: each point from rest), at the step that meets its
+    ``accuracy``. Points of different state sizes are solved in groups.
+
+    The steady state is the motion's attractor: a short transient, then Newton on the
+    period map; an orbit Newton finds unstable (spectral radius above 1) is not the
+    attractor, and the point's whole budget of transient is run instead."""
     n = len(points)
     systems = [system_of(p) for p in points]
     dims = [len(bs.system.matrix) for bs in systems]
@@ -233,7 +240,12 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
     period = period.astype(np.int64)
     packs0 = g.packs(todo, 0)
     orbit, jac, conv = g.newton(packs0, todo, e, period)
-    # where Newton did not converge: the whole budget of transient, from where it stopped
+    # where Newton did not converge, or found an orbit the motion leaves (unstable): the
+    # whole budget of transient, from where it stopped
+    rho = np.array([np.abs(np.linalg.eigvals(J)).max() if np.isfinite(J).all() else np.inf
+                    for J in jac])
+    conv &= rho <= UNSTABLE
+    jac[~conv] = np.nan
     lost = np.flatnonzero(~conv)
     states = orbit.copy()
     if len(lost):
@@ -292,13 +304,19 @@ def points_of(preset: str | None, fixed: dict, axes: dict) -> tuple[list, list]:
 
 
 def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
-               **fixed) -> xr.Dataset:
+               progress=None, **fixed) -> xr.Dataset:
     """Steady states of the beam over a grid (``axes``: parameter name -> values, SI
     units). With ``directions`` ("up", "down" or both) and a ``frequency`` axis, each line
     along frequency is swept in that direction, every point starting from the previous
     one's orbit (the stop's hysteresis); otherwise every point starts from its linear
-    steady state. Returns a CF dataset (``model`` = "beam")."""
-    axes = {name: np.asarray(v, dtype=float) if name != "n_modes" else np.asarray(v)
+    steady state. ``progress(done, total, what)``, if given, is called after each step of
+    the lines (or once for an unswept grid). Returns a CF dataset (``model`` = "beam")."""
+    kinds = {"float": float, "int": np.int64}
+    for name in axes:
+        if name not in BEAM_PARAMETERS:
+            raise ParameterError(f"unknown beam parameter {name!r} on a sweep axis: known "
+                                 f"parameters are {', '.join(BEAM_PARAMETERS)}")
+    axes = {name: np.asarray(v, dtype=kinds.get(BEAM_PARAMETERS[name].kind, object))
             for name, v in axes.items()}
     directions = (directions,) if isinstance(directions, str) else directions
     if directions and "frequency" not in axes:
@@ -306,9 +324,11 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
     points, shape = points_of(preset, fixed, axes)
     if not directions:
         ds = _dataset(solve_beam(points), points, axes, shape)
+        if progress is not None:
+            progress(1, 1, f"{len(points)} points")
     else:
-        parts = [_dataset(_swept(points, axes, shape, d), points, axes, shape)
-                 for d in directions]
+        parts = [_dataset(_swept(points, axes, shape, d, progress, (k, len(directions))),
+                          points, axes, shape) for k, d in enumerate(directions)]
         ds = xr.concat(parts, dim=xr.DataArray(list(directions), dims="direction",
                                                name="direction"))
         ds["direction"].attrs = {"long_name": "direction of the frequency sweep",
@@ -316,8 +336,9 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
     return _attributes(ds, points[0], preset, fixed)
 
 
-def _swept(points, axes, shape, direction) -> BeamSolution:
-    """The grid solved line by line along frequency in ``direction``."""
+def _swept(points, axes, shape, direction, progress=None, part=(0, 1)) -> BeamSolution:
+    """The grid solved line by line along frequency in ``direction``; ``progress`` told
+    after each step (of ``part`` = (index, count) of the directions run)."""
     names = list(axes)
     f_axis = names.index("frequency")
     grid = np.arange(len(points)).reshape(shape)
@@ -335,9 +356,14 @@ def _swept(points, axes, shape, direction) -> BeamSolution:
         if out is None:
             out = BeamSolution({n: np.empty((len(points),) + v.shape[1:])
                                 for n, v in sol.values.items()},
-                               np.empty((len(points),) + sol.ends.shape[1:]), None)
+                               np.empty((len(points),) + np.shape(sol.ends)[1:]), None)
         for n, v in sol.values.items():
             out.values[n][ids] = v
+        if progress is not None:
+            count = shape[f_axis]
+            done = part[0] * count + list(order).index(k) + 1
+            progress(done, part[1] * count, f"{direction} sweep, frequency = "
+                     f"{points[ids[0]]['frequency']:g} Hz, {len(ids)} line(s)")
     return out
 
 
@@ -374,8 +400,8 @@ def _unit(name: str) -> str:
 
 def _attributes(ds: xr.Dataset, p: dict, preset, fixed) -> xr.Dataset:
     ds.attrs.update({
-        "Conventions": "CF-1.8", "title": "harvester_sweep: steady states of the beam model",
-        "source": f"harvester_sweep {version()} modal engine", "model": "beam",
+        "Conventions": "CF-1.8", "title": "harvester_sweep steady states of the beam model",
+        "source": f"harvester_sweep {__version__} modal engine", "model": "beam",
         "preset": preset or DEFAULT_BEAM_PRESET,
         "notes": "; ".join(BEAM_PRESET_NOTES.get(preset or DEFAULT_BEAM_PRESET, [])),
     })

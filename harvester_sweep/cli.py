@@ -796,12 +796,12 @@ def _beam_rows(outputs: dict, p: dict) -> list:
 
 def _beam_table(rows: list, p: dict, preset: str, status: str) -> str:
     """A beam point's outputs as a table, lengths in micrometres as in the other tables."""
-    from .beam_parameters import BEAM_PRESET_NOTES
+    from .beam_parameters import BEAM_PRESET_NOTES, contact_position
 
     stop = ("a rigid stop" if p["rod_modes"] == 0
             else f"a rod stop in {p['rod_modes']} modes")
     lines = [f"beam scene '{preset}': {p['n_modes']} bending modes striking {stop} at "
-             f"{p['contact_position'] / p['length']:.3g} L, gap = {p['gap'] / 1e-6:g} {_UM}, "
+             f"{contact_position(p) / p['length']:.3g} L, gap = {p['gap'] / 1e-6:g} {_UM}, "
              f"frequency = {p['frequency']:g} Hz, amplitude = {p['amplitude']:g} m/s^2, "
              f"resistance = {p['resistance']:g} ohm"]
     lines += [f"  note: {note}" for note in BEAM_PRESET_NOTES.get(preset, [])]
@@ -890,8 +890,8 @@ def _beam_sweep(args) -> int:
     points_of(preset, overrides, axes)
     _announce_beam_compilation()
     start = time.perf_counter()
-    with _beam_progress(axes, directions, quiet=args.quiet):
-        ds = beam_sweep(axes, preset, directions=directions, **overrides)
+    ds = beam_sweep(axes, preset, directions=directions,
+                    progress=_beam_progress(args.quiet), **overrides)
     seconds = time.perf_counter() - start
     with _writing(args.output):
         write_netcdf(ds, args.output)
@@ -906,38 +906,20 @@ def _beam_sweep(args) -> int:
     return 0
 
 
-@contextlib.contextmanager
-def _beam_progress(axes: dict, directions, quiet: bool):
-    """One line on stderr per frequency step of a swept sweep (or per batch of points
-    otherwise) while beam_sweep runs: beam_runs has no progress hook, so its solve_beam
-    is wrapped for the call (each call is one step of every line)."""
-    from . import beam_runs
+def _beam_progress(quiet: bool):
+    """beam_sweep's progress hook: one line on stderr per frequency step of a swept sweep
+    (each step of every line at once), or one for an unswept grid; None when quiet."""
+    if quiet:
+        return None
+    begun = [time.perf_counter()]
 
-    solve = beam_runs.solve_beam
-    steps = len(axes["frequency"]) if directions else None
-    calls = []
+    def report(done: int, total: int, what: str) -> None:
+        now = time.perf_counter()
+        print(f"harvester-sweep: {done}/{total}: {what} in {now - begun[0]:.2g} s",
+              file=sys.stderr, flush=True)
+        begun[0] = now
 
-    def counted(points, starts=None):
-        begun = time.perf_counter()
-        solution = solve(points, starts)
-        calls.append(None)
-        if steps:
-            direction = directions[min((len(calls) - 1) // steps, len(directions) - 1)]
-            step = (len(calls) - 1) % steps + 1
-            print(f"harvester-sweep: {direction} {step}/{steps}: frequency = "
-                  f"{points[0]['frequency']:g} Hz, {len(points)} line(s) in "
-                  f"{time.perf_counter() - begun:.2g} s", file=sys.stderr, flush=True)
-        else:
-            print(f"harvester-sweep: {len(points)} point(s) in "
-                  f"{time.perf_counter() - begun:.2g} s", file=sys.stderr, flush=True)
-        return solution
-
-    if not quiet:
-        beam_runs.solve_beam = counted
-    try:
-        yield
-    finally:
-        beam_runs.solve_beam = solve
+    return report
 
 
 def _print_parameters(model: str = "tip_mass") -> int:

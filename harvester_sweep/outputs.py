@@ -147,7 +147,8 @@ _OUTPUTS = (
            "was found (the Newton iterates and their perturbed copies not counted)", "int32"),
     # made around the engine by the periodic-orbit solver
     Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max and "
-           "x_min: their change when the orbit is solved again at twice the steps per period",
+           "x_min (and root_strain_max for the beam): their change when the orbit is solved "
+           "again at twice the steps per period (the beam: and half the contact step)",
            comment="NaN where not estimated or not settled", where="run"),
     Output("spectral_radius", "1", "largest modulus of the Floquet multipliers: the orbit "
            "is stable below 1", comment=_NOT_SETTLED, where="run"),
@@ -215,7 +216,7 @@ _OUTPUTS = (
     Output("modal_amplitude", "m kg0.5", "largest magnitude of each bending mode's "
            "mass-normalised coordinate over the orbit", where="beam", dims=("mode",)),
     Output("stop_face_max", "m", "largest displacement of the rod stop's contact face "
-           "towards its base (0 for a rigid stop)", where="beam"),
+           "towards its base (absent with a rigid stop)", where="beam"),
     Output("contact_step", "s", "RK4 sub-step in contact of the orbit reported", where="beam"),
 )
 OUTPUTS: dict[str, Output] = {o.name: o for o in _OUTPUTS}
