@@ -52,7 +52,9 @@ def beam_system(p: dict) -> BeamSystem:
     n = p["n_modes"]
     strain = (beam.substrate_thickness / 2 + beam.piezo_thickness) * modes.root_curvature
     system = beam_model.modal_system(
-        omega=modes.omega, zeta=np.full(n, p["damping_ratio"]), chi=modes.coupling,
+        omega=modes.omega,
+        zeta=(np.full(n, p["damping_ratio"]) if p["mode_damping_ratios"] is None
+              else np.array(p["mode_damping_ratios"])), chi=modes.coupling,
         gamma=modes.forcing, phi_tip=modes.tip,
         phi_contact=modes.shape(contact_position(p))[:, 0], root_strain=strain,
         capacitance=beam.capacitance, resistance=p["resistance"], gap=p["gap"],

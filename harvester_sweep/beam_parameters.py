@@ -18,6 +18,33 @@ from .parameters import PARAMETERS, Parameter, ParameterError, value_text
 from .rod import MAX_MODES as MAX_ROD_MODES
 from .rod import Rod
 
+
+class _Ratios(Parameter):
+    """A list of damping ratios in [0, 1), one per bending mode (text: comma-separated)."""
+
+    def range_text(self) -> str:
+        return "a list of numbers in [0, 1), one per bending mode"
+
+    def check(self, value):
+        if value is None:
+            return None
+        items = value.split(",") if isinstance(value, str) else value
+        if not isinstance(items, (list, tuple)) or not items:
+            raise ParameterError(f"{self.name} [-] = {value_text(value)}: must be "
+                                 f"{self.range_text()}")
+        element = Parameter(self.name, "1", self.description, low=0, high=1, high_open=True)
+        out = []
+        for item in items:
+            if isinstance(item, str):
+                try:
+                    item = float(item)
+                except ValueError:
+                    raise ParameterError(f"{self.name} [-] = {value_text(value)}: must be "
+                                         f"{self.range_text()}") from None
+            out.append(element.check(item))
+        return tuple(out)
+
+
 _P = Parameter
 _SHARED = ("damping_ratio", "resistance", "amplitude", "frequency", "gap", "lower_gap",
            "hertz_stiffness", "restitution", "impact_velocity", "contact_damping", "accuracy",
@@ -39,6 +66,20 @@ BEAM_PARAMETERS: dict[str, Parameter] = {
         _P("connection", "1", "how the two piezo layers feed the load", kind="choice",
            choices=CONNECTIONS),
         _P("n_modes", "1", "bending modes of the beam", kind="int", low=1, high=MAX_MODES),
+        _Ratios("mode_damping_ratios", "1", "damping ratio of each bending mode, one per "
+                "mode (unset: damping_ratio for all)", kind="list", optional=True),
+        _P("substrate_modulus", "Pa", "substrate's Young's modulus (unset: the material's)",
+           low=0, low_open=True, optional=True),
+        _P("substrate_density", "kg/m^3", "substrate's density (unset: the material's)",
+           low=0, low_open=True, optional=True),
+        _P("piezo_modulus", "Pa", "piezo layers' Young's modulus 1/s11^E (unset: the "
+           "material's)", low=0, low_open=True, optional=True),
+        _P("piezo_density", "kg/m^3", "piezo layers' density (unset: the material's)", low=0,
+           low_open=True, optional=True),
+        _P("d31", "m/V", "piezoelectric constant d31 (unset: the material's)",
+           optional=True),
+        _P("permittivity", "F/m", "piezo permittivity eps33^T at constant stress (unset: the "
+           "material's)", low=0, low_open=True, optional=True),
         _P("contact_position", "m", "span position s_c of the contact from the clamp, at "
            "most the length (unset: the tip)", low=0, low_open=True, optional=True),
         _P("rod_modes", "1", "longitudinal modes of a rod stop (0: a rigid stop)", kind="int",
@@ -49,6 +90,10 @@ BEAM_PARAMETERS: dict[str, Parameter] = {
            choices=tuple(MATERIALS)),
         _P("rod_damping_ratio", "1", "modal damping ratio of the rod stop", low=0, high=1,
            high_open=True),
+        _P("rod_modulus", "Pa", "rod's Young's modulus (unset: the material's)", low=0,
+           low_open=True, optional=True),
+        _P("rod_density", "kg/m^3", "rod's density (unset: the material's)", low=0,
+           low_open=True, optional=True),
         _P("steps_per_period", "1", "grid steps per forcing period that look for contact and "
            "sample the outputs (unset: chosen from the modes and `accuracy`)", kind="int",
            low=16, high=1e7, optional=True),
@@ -67,7 +112,10 @@ _TABLE_1_STOP = dict(damping_ratio=0.01, resistance=10e3, amplitude=1.0, frequen
                      impact_velocity=1.76e-3, contact_damping=None,
                      contact_law="lankarani_nikravesh", accuracy=1e-7,
                      settle_tolerance=1e-10, steps_per_period=None, contact_step=None,
-                     max_periods=20000, n_modes=5)
+                     max_periods=20000, n_modes=5, mode_damping_ratios=None,
+                     substrate_modulus=None, substrate_density=None, piezo_modulus=None,
+                     piezo_density=None, d31=None, permittivity=None, rod_modulus=None,
+                     rod_density=None)
 
 
 def _preset(name: str) -> MappingProxyType:
@@ -114,12 +162,20 @@ def resolve_beam_parameters(preset: str | None = DEFAULT_BEAM_PRESET, **override
                                  f"are {', '.join(BEAM_PARAMETERS)}")
     p = dict(BEAM_PARAMETER_PRESETS[preset])
     p.update(overrides)
+    if isinstance(p["mode_damping_ratios"], list):  # (hashable, as every value here)
+        p["mode_damping_ratios"] = tuple(p["mode_damping_ratios"])
     checked = {name: BEAM_PARAMETERS[name].check(p[name]) for name in BEAM_PARAMETERS}
     if checked["contact_position"] is not None \
             and checked["contact_position"] > checked["length"]:
         raise ParameterError(
             f"contact_position [m] = {value_text(checked['contact_position'])}: must be in "
             f"(0, length = {checked['length']:g} m]")
+    ratios = checked["mode_damping_ratios"]
+    if ratios is not None and len(ratios) != checked["n_modes"]:
+        raise ParameterError(
+            f"mode_damping_ratios [-] = {value_text(list(ratios))}: must be "
+            f"{BEAM_PARAMETERS['mode_damping_ratios'].range_text()} (n_modes = "
+            f"{checked['n_modes']})")
     if checked["rod_modes"] > 0 and checked["lower_gap"] is not None:
         raise ParameterError(
             f"lower_gap [m] = {value_text(checked['lower_gap'])}: a second stop below beside a "
@@ -144,7 +200,10 @@ def bimorph(p: dict) -> Bimorph:
                    substrate_thickness=p["substrate_thickness"],
                    piezo_thickness=p["piezo_thickness"], substrate=p["substrate"],
                    piezo=p["piezo"], tip_mass=p["tip_mass"], tip_inertia=p["tip_inertia"],
-                   connection=p["connection"])
+                   connection=p["connection"], substrate_modulus=p["substrate_modulus"],
+                   substrate_density=p["substrate_density"], piezo_modulus=p["piezo_modulus"],
+                   piezo_density=p["piezo_density"], d31=p["d31"],
+                   permittivity=p["permittivity"])
 
 
 def rod(p: dict) -> Rod | None:
@@ -152,4 +211,5 @@ def rod(p: dict) -> Rod | None:
     if p["rod_modes"] == 0:
         return None
     return Rod(length=p["rod_length"], area=p["rod_area"], material=p["rod_material"],
+               modulus=p["rod_modulus"], density=p["rod_density"],
                damping_ratio=p["rod_damping_ratio"])

@@ -642,7 +642,7 @@ def _beam_assignment(text: str) -> tuple[str, object]:
     if PARAMETERS.get(name) is spec:
         return parse_assignment(text)
     raw = raw.strip()
-    if spec.kind in ("choice", "bool"):
+    if spec.kind in ("choice", "bool", "list"):
         return name, raw
     if spec.optional and raw.lower() in ("", "none"):
         return name, None

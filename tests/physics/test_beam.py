@@ -23,16 +23,19 @@ def _solve(preset="bimorph_tip", **overrides):
     return p, solve_beam([p])
 
 
-@pytest.mark.parametrize("n_modes, position", [(5, None), (3, 0.6)])
-def test_without_contact_the_beam_is_its_modal_phasor_sum(n_modes, position):
+@pytest.mark.parametrize("n_modes, position, ratios", [(5, None, None),
+                                                       (3, 0.6, (0.01, 0.03, 0.002))])
+def test_without_contact_the_beam_is_its_modal_phasor_sum(n_modes, position, ratios):
     """Clear of the stop the engine's flow is exact: the orbit is the modal phasor sum
-    (bimorph.modal_response, written from the modal equations apart from the engine)."""
-    over = dict(gap=1e-2, n_modes=n_modes, frequency=170.0)
+    (bimorph.modal_response, written from the modal equations apart from the engine),
+    with one damping ratio for all modes or one per mode."""
+    over = dict(gap=1e-2, n_modes=n_modes, frequency=170.0, mode_damping_ratios=ratios)
     if position is not None:
         over["contact_position"] = position * resolve_beam_parameters()["length"]
     p, sol = _solve(**over)
     W, V = bm.modal_response(bimorph(p), p["frequency"], p["resistance"], n_modes=n_modes,
-                             damping_ratio=p["damping_ratio"], amplitude=p["amplitude"])
+                             damping_ratio=p["damping_ratio"] if ratios is None else ratios,
+                             amplitude=p["amplitude"])
     v = sol.values
     assert v["status"][0] == 0 and v["impacts_per_period"][0] == 0
     assert v["x_max"][0] == pytest.approx(abs(W), rel=1e-9)
