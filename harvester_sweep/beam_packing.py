@@ -7,6 +7,7 @@ tip-mass model's lane engine).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -32,6 +33,13 @@ SUBSTEPS_PER_CONTACT = 64
 LIMIT = 1e6
 
 
+# The modes of a beam (a frozen, hashable Bimorph) and of a rod, computed once for every
+# point of a sweep that shares them: the grid's frequencies, gaps and loads do not change
+# them.
+_modes = functools.lru_cache(maxsize=256)(_bimorph.modes)
+_rod_modes = functools.lru_cache(maxsize=256)(_rod.rod_modes)
+
+
 @dataclass
 class BeamSystem:
     """A beam parameter set's model: its modes, its rod's, the linear system."""
@@ -46,9 +54,9 @@ class BeamSystem:
 def beam_system(p: dict) -> BeamSystem:
     """The model of a validated beam parameter set (beam_parameters.resolve_beam_parameters)."""
     beam = bimorph(p)
-    modes = _bimorph.modes(beam, p["n_modes"])
+    modes = _modes(beam, p["n_modes"])
     stop = rod(p)
-    rm = None if stop is None else _rod.rod_modes(stop, p["rod_modes"])
+    rm = None if stop is None else _rod_modes(stop, p["rod_modes"])
     n = p["n_modes"]
     strain = (beam.substrate_thickness / 2 + beam.piezo_thickness) * modes.root_curvature
     system = beam_model.modal_system(
