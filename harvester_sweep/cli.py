@@ -511,6 +511,14 @@ def _plot(args) -> int:
     if sweeps and "point" not in ds.dims:
         raise ParameterError("--over: draws sweeps under a branch (a file written by "
                              "'continue')")
+    if ds.attrs.get("model") == "beam":
+        from .plots import plot_beam_scene, plot_beam_sweep
+
+        if sweeps or scales:
+            raise ParameterError("--over, --log, --linear: not for a beam file")
+        with ds, _writing(args.output):
+            (plot_beam_scene if "time" in ds.dims else plot_beam_sweep)(ds, args.output)
+        return 0
     with ds, _writing(args.output), _complete(args.dataset):
         if "point" in ds.dims:
             plot_branch(ds, args.output, sweeps, scales=scales)
@@ -532,9 +540,7 @@ def _check_written_here(path: str, ds) -> None:
     "harvester_sweep ..." (datasets.py), and the plots read its variables and attributes
     by name."""
     if ds.attrs.get("model") == "beam":
-        raise ParameterError(f"{path}: a file of the beam model (beam-scene, beam-sweep): "
-                             "plot does not draw the beam yet; its outputs are the file's "
-                             "variables (docs/guide.md, 'The beam model')")
+        return  # (drawn by plots.plot_beam_scene, plot_beam_sweep)
     title = ds.attrs.get("title")
     if not (isinstance(title, str) and title.startswith("harvester_sweep ")):
         raise ParameterError(f"{path}: not a file written by harvester-sweep (its title "

@@ -759,3 +759,93 @@ def derived_stiffness(values, skip=()) -> str:
     return (f"hertz_stiffness = {computed:.3g} N/m^1.5 (derived from stop_mass = "
             f"{quantity_text(float(got['stop_mass']), 'kg')}, {got['tip_material']} tip on "
             f"{got['stop_material']} stop)")
+
+
+def plot_beam_scene(ds, path=None) -> Figure:
+    """A beam orbit as the paper's Fig. 3, with the quantity the stop is there to limit:
+    (a) tip and contact-point displacement [um] with the stop's gap (and a rod's face),
+    (b) voltage, (c) instantaneous power, (d) contact force, (e) root strain
+    [microstrain]. ``ds``: the time history of ``beam_runs.beam_scene``."""
+    fig = _new_figure((8, 11))
+    axes = fig.subplots(5, 1, sharex=True)
+    t = (ds["time"].values - ds["time"].values[0]) * 1e3
+    panels = [("tip_displacement", "displacement", "m"), ("voltage", "voltage", "V"),
+              ("instantaneous_power", "power", "W"), ("contact_force", "contact force", "N"),
+              ("root_strain", "root strain", "1")]
+    for ax, (name, label, unit), letter in zip(axes, panels, "abcde"):
+        values = ds[name].values
+        scale, shown = (1e-6, "\u00b5strain") if unit == "1" else _display(unit, values)
+        ax.plot(t, values / scale, lw=1.0, label="tip" if name == "tip_displacement" else None)
+        ax.set_ylabel(f"{label} [{shown}]")
+        ax.set_title(f"({letter}) {label}", loc="left", fontsize="medium")
+        ax.grid(alpha=0.3)
+        if name == "tip_displacement":
+            ax.plot(t, ds["contact_displacement"].values / scale, lw=1.0, color="C1",
+                    label="contact point")
+            gap = float(ds.attrs.get("parameter_gap", np.nan))
+            if "stop_face" in ds:
+                ax.plot(t, (gap + ds["stop_face"].values) / scale, color="C3", lw=1.0,
+                        label="rod face g + u_c")
+            elif np.isfinite(gap):
+                ax.axhline(gap / scale, color="C3", ls="--", lw=1.0,
+                           label=f"stop (gap {quantity_text(gap, 'm')})")
+            ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncols=3,
+                      fontsize="small", frameon=False, borderaxespad=0.1)
+    axes[-1].set_xlabel("time from the orbit's start [ms]")
+    power = float(ds["power"]) if "power" in ds else None
+    _suptitle(fig, "beam orbit" + (f": mean power {quantity_text(power, 'W', 3)}"
+                                   if power is not None else ""))
+    return _save(fig, path)
+
+
+def plot_beam_sweep(ds, path=None) -> Figure:
+    """What a beam sweep dataset (``beam_runs.beam_sweep``) holds. One grid axis: power,
+    tip displacement extremes [um] and root strain [microstrain] against it, one curve per
+    direction. Two grid axes: maps of the power and of the root strain (the first
+    direction's, where there are several)."""
+    grid = [d for d in ds.dims if d not in ("direction", "mode")]
+    directions = list(ds["direction"].values) if "direction" in ds.dims else [None]
+    if len(grid) == 1:
+        axis = grid[0]
+        fig = _new_figure((7.5, 8))
+        panels = fig.subplots(3, 1, sharex=True)
+        x = ds[axis].values
+        x_scale, x_shown = _display(_unit(ds, axis), x)
+        for d in directions:
+            part = ds if d is None else ds.sel(direction=d)
+            style = dict(_LINE_STYLES[d if d in _LINE_STYLES else None])
+            label = d or None
+            for ax, name, scale in ((panels[0], "power", None), (panels[1], "x_max", 1e-6),
+                                    (panels[2], "root_strain_max", 1e-6)):
+                values = part[name].values
+                s = scale or _display("W", values)[0]
+                ax.plot(x / x_scale, values / s, lw=1.0, ms=4, label=label, **style)
+            panels[1].plot(x / x_scale, part["x_min"].values / 1e-6, lw=1.0, ms=4,
+                           **dict(style, alpha=0.5))
+        power_scale, power_shown = _display("W", ds["power"].values)
+        panels[0].set_ylabel(f"power [{power_shown}]")
+        panels[1].set_ylabel("tip x_max, x_min [\u00b5m]")
+        panels[2].set_ylabel("root strain [\u00b5strain]")
+        for ax in panels:
+            ax.grid(alpha=0.3)
+        if directions != [None]:
+            panels[0].legend(fontsize="small")
+        panels[-1].set_xlabel(f"{axis} [{x_shown}]")
+    elif len(grid) == 2:
+        fig = _new_figure((11, 4.5))
+        part = ds if directions == [None] else ds.sel(direction=directions[0])
+        for ax, (name, unit) in zip(fig.subplots(1, 2), (("power", "W"),
+                                                         ("root_strain_max", "1"))):
+            values = part[name].transpose(grid[1], grid[0]).values
+            scale, shown = (1e-6, "\u00b5strain") if unit == "1" else _display(unit, values)
+            xs = [part[g].values for g in grid]
+            mesh = ax.pcolormesh(_edges(xs[0], False), _edges(xs[1], False), values / scale,
+                                 shading="flat")
+            fig.colorbar(mesh, ax=ax, label=f"{name} [{shown}]")
+            ax.set_xlabel(f"{grid[0]} [{_unit(ds, grid[0])}]")
+            ax.set_ylabel(f"{grid[1]} [{_unit(ds, grid[1])}]")
+    else:
+        raise ParameterError(f"the dataset has {len(grid)} grid axes ({', '.join(grid)}): "
+                             "plot draws one or two; select a slice first")
+    _suptitle(fig, f"beam model, preset {ds.attrs.get('preset', '')}")
+    return _save(fig, path)
