@@ -80,8 +80,9 @@ class BeamSolution:
     strobes: np.ndarray
 
 
-def _table(p: dict, bs: BeamSystem, row: np.ndarray) -> dict:
-    """A point's outputs from its engine metric row."""
+def point_outputs(p: dict, bs: BeamSystem, row: np.ndarray) -> dict:
+    """A point's outputs (a dict of SCALARS but those made around the engine, and its
+    modal amplitudes (N,)) from its engine metric row."""
     names = bs.system.output_names
     K = len(names)
     nh = len(METRIC_HEAD)
@@ -251,7 +252,7 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
     if len(lost):
         states[lost] = e[lost]
     m, e, s = g.measure(todo, 0, states)
-    coarse = {k: (_table(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
+    coarse = {k: (point_outputs(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
     periods_run = {k: transient[k] + m[k, HEAD.periods_run] for k in todo}
     done = {}
     lv = 1
@@ -266,7 +267,7 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
         m, e, s = modal_map.run(packs, states)
         nxt = []
         for j, k in enumerate(todo):
-            fine = (_table(points[k], systems[k], m[j]), e[j], s[j], lv)
+            fine = (point_outputs(points[k], systems[k], m[j]), e[j], s[j], lv)
             periods_run[k] += m[j, HEAD.periods_run]
             est = _change(coarse[k][0][0], fine[0][0])
             if est <= points[k]["accuracy"] or not math.isfinite(est) or lv == MAX_LEVELS:
@@ -319,6 +320,9 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
     axes = {name: np.asarray(v, dtype=kinds.get(BEAM_PARAMETERS[name].kind, object))
             for name, v in axes.items()}
     directions = (directions,) if isinstance(directions, str) else directions
+    for d in directions or ():
+        if d not in ("up", "down"):
+            raise ParameterError(f"directions [-] = {d!r}: must be 'up', 'down' or both")
     if directions and "frequency" not in axes:
         raise ParameterError("directions [-]: a sweep up or down needs a frequency axis")
     points, shape = points_of(preset, fixed, axes)
@@ -343,7 +347,9 @@ def _swept(points, axes, shape, direction, progress=None, part=(0, 1)) -> BeamSo
     f_axis = names.index("frequency")
     grid = np.arange(len(points)).reshape(shape)
     lines = np.moveaxis(grid, f_axis, -1).reshape(-1, shape[f_axis])
-    order = range(shape[f_axis]) if direction == "up" else range(shape[f_axis] - 1, -1, -1)
+    # up: rising frequency, down: falling, whatever the axis's order
+    rising = np.argsort(np.asarray(axes["frequency"], dtype=float), kind="stable")
+    order = [int(k) for k in (rising if direction == "up" else rising[::-1])]
     out = None
     ends = {}
     for k in order:
