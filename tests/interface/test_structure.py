@@ -110,7 +110,7 @@ LAYERS = (
     ("results", "run_estimate"),
     ("datasets", "plots"),
     ("scene", "continuation", "basins", "sweep_file", "chunks", "chunk_store", "beam_runs",
-     "beam_basins"),
+     "beam_basins", "beam_continuation"),
     ("branch_file", "basin_file", "cluster"),
     ("sweep",),
     ("cli",),

@@ -1,0 +1,52 @@
+"""Branches of the beam's orbits: the one-mode beam at its tip is the tip-mass model, so
+its folds and grazing must be where the lane engine's own continuation (plain RK4 on the
+reduced tip-mass model, its own corrector and location) puts them."""
+
+from __future__ import annotations
+
+import pytest
+
+from harvester_sweep import bimorph as bm
+from harvester_sweep import continue_branch
+from harvester_sweep.beam_continuation import continue_beam_branch
+from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
+from harvester_sweep.outputs import BIFURCATIONS
+from harvester_sweep.parameters import ParameterError
+
+
+def _located(ds, parameter="frequency"):
+    names = list(BIFURCATIONS)
+    return sorted((names[int(flag)], float(value)) for flag, value
+                  in zip(ds["bifurcation"].values, ds[parameter].values) if flag)
+
+
+def test_the_one_mode_beams_folds_and_grazing_are_the_tip_mass_models():
+    beam = continue_beam_branch("frequency", 200.0, 280.0, "bimorph_tip", n_modes=1,
+                                step=0.02)
+    p = resolve_beam_parameters("bimorph_tip", n_modes=1)
+    tip = continue_branch("paper", "frequency", 200.0, 280.0,
+                          **bm.as_tip_mass_parameters(bimorph(p)))
+    tip = tip.dataset if hasattr(tip, "dataset") else tip
+    found, expected = _located(beam), _located(tip)
+    assert [kind for kind, _ in found] == [kind for kind, _ in expected] \
+        == ["fold", "fold", "grazing"]
+    for (_, f_beam), (_, f_tip) in zip(found, expected):
+        assert f_beam == pytest.approx(f_tip, rel=1e-7)
+    # the branch between its folds is unstable, outside them stable
+    folds = sorted(f for kind, f in found if kind == "fold")
+    inside = (beam["frequency"] > folds[0] + 1) & (beam["frequency"] < folds[1] - 1)
+    assert set(beam["stable"].values[inside.values]) >= {0}
+    assert beam["frequency"].values[-1] >= 280.0
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(parameter="n_modes"), "parameter"),
+    (dict(step=0.5), "step"),
+    (dict(max_points=1), "max_points"),
+    (dict(start=-1.0), "frequency"),
+])
+def test_bad_branch_options_are_refused(kwargs, words):
+    options = dict(parameter="frequency", start=140.0, stop=150.0) | kwargs
+    with pytest.raises(ParameterError, match=words):
+        continue_beam_branch(options.pop("parameter"), options.pop("start"),
+                             options.pop("stop"), "bimorph_tip", n_modes=1, **options)
