@@ -305,13 +305,16 @@ def points_of(preset: str | None, fixed: dict, axes: dict) -> tuple[list, list]:
 
 
 def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
-               progress=None, **fixed) -> xr.Dataset:
+               progress=None, *, solver=None, **fixed) -> xr.Dataset:
     """Steady states of the beam over a grid (``axes``: parameter name -> values, SI
     units). With ``directions`` ("up", "down" or both) and a ``frequency`` axis, each line
     along frequency is swept in that direction, every point starting from the previous
     one's orbit (the stop's hysteresis); otherwise every point starts from its linear
     steady state. ``progress(done, total, what)``, if given, is called after each step of
-    the lines (or once for an unswept grid). Returns a CF dataset (``model`` = "beam")."""
+    the lines (or once for an unswept grid). Returns a CF dataset (``model`` = "beam").
+
+    ``solver``, if given, solves the checked grid instead of :func:`solve_grid` (with its
+    arguments and result): beam_cluster.run_beam_sweep passes one that runs it on Dask."""
     kinds = {"float": float, "int": np.int64}
     for name in axes:
         if name not in BEAM_PARAMETERS:
@@ -326,18 +329,29 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
     if directions and "frequency" not in axes:
         raise ParameterError("directions [-]: a sweep up or down needs a frequency axis")
     points, shape = points_of(preset, fixed, axes)
+    solved = (solver or solve_grid)(points, axes, shape, directions, progress)
     if not directions:
-        ds = _dataset(solve_beam(points), points, axes, shape)
-        if progress is not None:
-            progress(1, 1, f"{len(points)} points")
+        ds = _dataset(solved[0], points, axes, shape)
     else:
-        parts = [_dataset(_swept(points, axes, shape, d, progress, (k, len(directions))),
-                          points, axes, shape) for k, d in enumerate(directions)]
+        parts = [_dataset(sol, points, axes, shape) for sol in solved]
         ds = xr.concat(parts, dim=xr.DataArray(list(directions), dims="direction",
                                                name="direction"))
         ds["direction"].attrs = {"long_name": "direction of the frequency sweep",
                                  "units": "1"}
     return _attributes(ds, points[0], preset, fixed)
+
+
+def solve_grid(points, axes, shape, directions=None, progress=None) -> list:
+    """The grid's points (``shape``, over ``axes``) solved in this process: a list of one
+    BeamSolution per direction (each line along frequency swept), or of one (each point
+    from rest) where there is none; ``progress`` as for beam_sweep."""
+    if not directions:
+        solved = solve_beam(points)
+        if progress is not None:
+            progress(1, 1, f"{len(points)} points")
+        return [solved]
+    return [_swept(points, axes, shape, d, progress, (k, len(directions)))
+            for k, d in enumerate(directions)]
 
 
 def _swept(points, axes, shape, direction, progress=None, part=(0, 1)) -> BeamSolution:
@@ -428,8 +442,12 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
     bs = system_of(p)
     steps = int(sol.values["steps_per_period"][0])
     pk = pack_beam(p, bs, steps, float(sol.values["contact_step"][0]))
-    rows = periods * (steps + 64 * 64 * 4) + 16
-    rec = modal_map.record_motion(pk, sol.ends[0], periods, rows)
+    rows = periods * (steps + 4096) + 16  # (grown until the record fits: never cut short)
+    while True:
+        rec = modal_map.record_motion(pk, sol.ends[0], periods, rows)
+        if len(rec) < rows:
+            break
+        rows *= 4
     S = len(bs.system.surfaces)
     names = bs.system.output_names
     col = {name: 1 + S + k for k, name in enumerate(names)}
