@@ -98,6 +98,13 @@ def _parser() -> argparse.ArgumentParser:
     beam_sweep.add_argument("--output", "--out", dest="output", required=True,
                             metavar="OUT.nc", help="netCDF file to write")
     beam_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
+    beam_where = beam_sweep.add_mutually_exclusive_group()
+    beam_where.add_argument("--workers", type=int, metavar="N",
+                            help="solve the grid in chunks on a local dask cluster of N "
+                            "worker processes")
+    beam_where.add_argument("--scheduler", metavar="ADDRESS",
+                            help="solve the grid in chunks on a running dask.distributed "
+                            "scheduler, e.g. tcp://127.0.0.1:8786")
 
     run = sub.add_parser("run", help="run a sweep file (TOML) into a netCDF dataset",
                          description="Run every point of a sweep file to steady state and write "
@@ -869,8 +876,8 @@ def _beam_series(series, outputs: dict, p: dict, preset: str):
 
 
 def _beam_sweep(args) -> int:
+    from .beam_cluster import run_beam_sweep
     from .beam_parameters import DEFAULT_BEAM_PRESET
-    from .beam_runs import beam_sweep
     from .datasets import write_netcdf
     from .outputs import STATUSES
 
@@ -896,8 +903,9 @@ def _beam_sweep(args) -> int:
     points_of(preset, overrides, axes)
     _announce_beam_compilation()
     start = time.perf_counter()
-    ds = beam_sweep(axes, preset, directions=directions,
-                    progress=_beam_progress(args.quiet), **overrides)
+    ds = run_beam_sweep(axes, preset, directions=directions,
+                        progress=_beam_progress(args.quiet), workers=args.workers,
+                        scheduler=args.scheduler, **overrides)
     seconds = time.perf_counter() - start
     with _writing(args.output):
         write_netcdf(ds, args.output)
@@ -914,7 +922,8 @@ def _beam_sweep(args) -> int:
 
 def _beam_progress(quiet: bool):
     """beam_sweep's progress hook: one line on stderr per frequency step of a swept sweep
-    (each step of every line at once), or one for an unswept grid; None when quiet."""
+    (each step of every line at once), or one for an unswept grid, or one per chunk on
+    dask; None when quiet."""
     if quiet:
         return None
     begun = [time.perf_counter()]

@@ -53,24 +53,11 @@ def run_on_dask(spec, todo, store, bar, workers, scheduler) -> None:
         scheduler was lost, or no worker was left for NO_WORKERS_SECONDS; every chunk that
         finished before is saved first.
     """
-    try:
-        from dask.distributed import Client, LocalCluster, wait
-        from distributed import KilledWorker
-    except ImportError:
-        raise ParameterError("workers and scheduler need dask.distributed: "
-                             "pip install 'harvester_sweep[cluster]'") from None
-    cluster, threads = None, None
-    if scheduler is None:
-        # ":0": any free port, so that a dashboard already running elsewhere is no conflict.
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=":0")
-        threads = threads_per_worker(workers)
-    try:
-        client = Client(cluster if cluster is not None else scheduler)
-    except (OSError, ValueError, TypeError) as error:
-        if cluster is not None:
-            cluster.close()
-        raise ParameterError(f"scheduler {scheduler!r}: cannot connect ({error})") from None
+    client, cluster = connect(workers, scheduler)
+    from dask.distributed import wait
+    from distributed import KilledWorker
+
+    threads = threads_per_worker(workers) if cluster is not None else None
     lost = {}  # chunk -> why it did not come back
     try:
         futures = {client.submit(compute_chunk, spec, chunk, threads, pure=False): chunk
@@ -113,6 +100,35 @@ def run_on_dask(spec, todo, store, bar, workers, scheduler) -> None:
         first = min(lost)
         raise ClusterError(f"{len(lost)} of {len(todo)} chunks did not come back from dask "
                            f"(chunk {first}: {lost[first]}); {store.kept_text()}")
+
+
+def connect(workers, scheduler) -> tuple:
+    """A dask client: on a new local cluster of ``workers`` processes (one thread each)
+    where ``scheduler`` is None, else on the scheduler at that address. Returns (client,
+    the local cluster or None); the caller closes both.
+
+    Raises
+    ------
+    ParameterError
+        Without dask.distributed, or when the scheduler cannot be reached (one line).
+    """
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise ParameterError("workers and scheduler need dask.distributed: "
+                             "pip install 'harvester_sweep[cluster]'") from None
+    cluster = None
+    if scheduler is None:
+        # ":0": any free port, so that a dashboard already running elsewhere is no conflict.
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=":0")
+    try:
+        client = Client(cluster if cluster is not None else scheduler)
+    except (OSError, ValueError, TypeError) as error:
+        if cluster is not None:
+            cluster.close()
+        raise ParameterError(f"scheduler {scheduler!r}: cannot connect ({error})") from None
+    return client, cluster
 
 
 def _workers(client) -> int:

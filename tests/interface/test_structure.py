@@ -111,7 +111,7 @@ LAYERS = (
     ("datasets", "plots"),
     ("scene", "continuation", "basins", "sweep_file", "chunks", "chunk_store", "beam_runs",
      "beam_basins", "beam_continuation"),
-    ("branch_file", "basin_file", "cluster"),
+    ("branch_file", "basin_file", "cluster", "beam_cluster"),
     ("sweep",),
     ("cli",),
 )
