@@ -166,10 +166,13 @@ class _Group:
         self.scale = [bs.scale for bs in systems]
 
     def packs(self, which, lv, budget=None):
+        """Rows of points ``which`` at level ``lv``; ``budget``: each one's own budget of
+        periods (a sequence over ``which``), else their max_periods."""
         out = []
-        for k in which:
+        for j, k in enumerate(which):
             steps, sub = self.first[k]
-            p = self.points[k] if budget is None else dict(self.points[k], max_periods=budget)
+            p = self.points[k] if budget is None else dict(self.points[k],
+                                                           max_periods=budget[j])
             out.append(pack_beam(p, self.systems[k], steps * 2 ** lv, sub / 2 ** lv))
         return out
 
@@ -235,7 +238,7 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
     todo = list(range(n))
     # level 0: a short transient, then Newton on the period map of the orbit's period
     short = [min(TRANSIENT, p["max_periods"]) for p in points]
-    m, e, _ = modal_map.run(g.packs(todo, 0, budget=max(short)), g.starts)
+    m, e, _ = modal_map.run(g.packs(todo, 0, budget=short), g.starts)
     transient = m[:, HEAD.periods_run]
     period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1), 1)
     period = period.astype(np.int64)
@@ -376,9 +379,11 @@ def _swept(points, axes, shape, direction, progress=None, part=(0, 1)) -> BeamSo
         if out is None:
             out = BeamSolution({n: np.empty((len(points),) + v.shape[1:])
                                 for n, v in sol.values.items()},
-                               np.empty((len(points),) + np.shape(sol.ends)[1:]), None)
+                               [None] * len(points), None)
         for n, v in sol.values.items():
             out.values[n][ids] = v
+        for i, end in zip(ids, sol.ends):
+            out.ends[int(i)] = end
         if progress is not None:
             count = shape[f_axis]
             done = part[0] * count + list(order).index(k) + 1
