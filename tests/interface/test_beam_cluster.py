@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from harvester_sweep import beam_cluster
 from harvester_sweep.beam_cluster import run_beam_sweep
 from harvester_sweep.beam_runs import beam_sweep
 from harvester_sweep.cli import main
@@ -114,12 +113,15 @@ def test_a_chunk_whose_workers_keep_dying_is_a_cluster_error_in_one_line(schedul
                                                                          monkeypatch):
     from types import SimpleNamespace
 
-    from distributed import KilledWorker
+    from distributed import Future, KilledWorker
 
-    def dying(*args):  # what dask raises once a task's workers died allowed_failures times
+    def dying(self, *args, **kwargs):
+        # what the client raises once a task's workers died allowed_failures times (made
+        # here: raised inside a task, dask's serialization of the exception drops its
+        # last worker, and its message then fails to format)
         raise KilledWorker("the task", SimpleNamespace(address="tcp://10.0.0.1:1"), 3)
 
-    monkeypatch.setattr(beam_cluster, "_solve_chunk", dying)
+    monkeypatch.setattr(Future, "result", dying)
     with pytest.raises(ClusterError) as caught:
         run_beam_sweep({"frequency": FREQUENCIES}, scheduler=scheduler, chunk_size=2,
                        n_modes=1)
