@@ -27,7 +27,6 @@ from .beam_parameters import (
     bimorph,
     resolve_beam_parameters,
 )
-from .models import beam as beam_model
 from .outputs import OUTPUTS, STATUS_FLAGS
 from .parameters import ParameterError
 from .version import __version__
@@ -419,8 +418,8 @@ def _dataset(sol: BeamSolution, points, axes, shape) -> xr.Dataset:
 
 
 def _unit(name: str) -> str:
-    unit = BEAM_PARAMETERS[name].unit
-    return unit
+    """The CF unit of a beam parameter."""
+    return BEAM_PARAMETERS[name].unit
 
 
 def _attributes(ds: xr.Dataset, p: dict, preset, fixed) -> xr.Dataset:
@@ -487,4 +486,4 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
     return outputs, series
 
 
-__all__ = ["BeamSolution", "beam_model", "beam_scene", "beam_sweep", "solve_beam"]
+__all__ = ["BeamSolution", "beam_scene", "beam_sweep", "solve_beam"]
