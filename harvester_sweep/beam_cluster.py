@@ -37,6 +37,18 @@ from .parameters import ParameterError, is_number, value_text
 CHUNKS_PER_THREAD = 4
 
 
+def check_cluster(workers, scheduler):
+    """Refuse, in one line, ``workers`` and ``scheduler`` together, a worker count that is
+    not a whole number >= 1 or an address dask cannot parse; returns the worker count."""
+    if workers is not None and scheduler is not None:
+        raise ParameterError("give workers or scheduler, not both")
+    if workers is not None:
+        workers = _whole("workers", workers)
+    if scheduler is not None:
+        check_scheduler(scheduler)
+    return workers
+
+
 def run_beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
                    progress=None, *, workers: int | None = None, scheduler: str | None = None,
                    chunk_size: int | None = None, **fixed):
@@ -66,12 +78,7 @@ def run_beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directi
         (a ParameterError) A chunk's workers kept dying, the connection to the scheduler
         was lost, or no worker was left for NO_WORKERS_SECONDS: one line, the sweep lost.
     """
-    if workers is not None and scheduler is not None:
-        raise ParameterError("give workers or scheduler, not both")
-    if workers is not None:
-        workers = _whole("workers", workers)
-    if scheduler is not None:
-        check_scheduler(scheduler)
+    workers = check_cluster(workers, scheduler)
     if chunk_size is not None:
         chunk_size = _whole("chunk_size", chunk_size)
     if workers is None and scheduler is None:

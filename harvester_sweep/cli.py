@@ -876,7 +876,7 @@ def _beam_series(series, outputs: dict, p: dict, preset: str):
 
 
 def _beam_sweep(args) -> int:
-    from .beam_cluster import run_beam_sweep
+    from .beam_cluster import check_cluster, run_beam_sweep
     from .beam_parameters import DEFAULT_BEAM_PRESET
     from .datasets import write_netcdf
     from .outputs import STATUSES
@@ -901,6 +901,7 @@ def _beam_sweep(args) -> int:
     from .beam_runs import points_of
 
     points_of(preset, overrides, axes)
+    check_cluster(args.workers, args.scheduler)
     _announce_beam_compilation()
     start = time.perf_counter()
     ds = run_beam_sweep(axes, preset, directions=directions,
