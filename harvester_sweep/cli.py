@@ -106,6 +106,37 @@ def _parser() -> argparse.ArgumentParser:
                             help="solve the grid in chunks on a running dask.distributed "
                             "scheduler, e.g. tcp://127.0.0.1:8786")
 
+    beam_branch = sub.add_parser(
+        "beam-continue", help="a branch of the beam model's orbits through folds, into "
+        "netCDF",
+        description="Follow the branch of periodic orbits of a beam point in one parameter "
+        "from START towards STOP through folds (pseudo-arclength), locating folds, period "
+        "doublings, Neimark-Sacker points and grazings, and write the CF dataset.")
+    _beam_common(beam_branch)
+    beam_branch.add_argument("parameter", help="the parameter followed, e.g. frequency")
+    beam_branch.add_argument("start", type=float, help="its first value (SI units)")
+    beam_branch.add_argument("stop", type=float, help="the value the branch heads for")
+    beam_branch.add_argument("--step", type=float, default=0.01,
+                             help="arclength step in units of the range (default 0.01)")
+    beam_branch.add_argument("--max-points", type=int, default=400, dest="max_points",
+                             help="points at most (default 400)")
+    beam_branch.add_argument("--output", "--out", dest="output", required=True,
+                             metavar="OUT.nc", help="netCDF file to write")
+
+    beam_basin = sub.add_parser(
+        "beam-basins", help="basins of attraction of one beam point, into netCDF",
+        description="Run a beam point from SAMPLES starts around its linear steady state "
+        "(in the first mode's plane), group the orbits reached, measure each attractor and "
+        "write the CF dataset.")
+    _beam_common(beam_basin)
+    beam_basin.add_argument("--samples", type=int, default=64, help="starts (default 64)")
+    beam_basin.add_argument("--seed", type=int, default=0, help="the starts' seed (default 0)")
+    beam_basin.add_argument("--box", type=float, default=2.0,
+                            help="half-width of the box of starts in units of the first "
+                            "mode's linear amplitude and rate (default 2)")
+    beam_basin.add_argument("--output", "--out", dest="output", required=True,
+                            metavar="OUT.nc", help="netCDF file to write")
+
     run = sub.add_parser("run", help="run a sweep file (TOML) into a netCDF dataset",
                          description="Run every point of a sweep file to steady state and write "
                          "the frequency-response / bifurcation dataset (see "
@@ -207,6 +238,8 @@ def _main(args) -> int:
             return _beam_scene(args)
         if args.command == "beam-sweep":
             return _beam_sweep(args)
+        if args.command in ("beam-continue", "beam-basins"):
+            return _beam_branch_or_basins(args)
         if args.command == "plot":
             return _plot(args)
         if args.command == "run":
@@ -519,12 +552,20 @@ def _plot(args) -> int:
         raise ParameterError("--over: draws sweeps under a branch (a file written by "
                              "'continue')")
     if ds.attrs.get("model") == "beam":
-        from .plots import plot_beam_scene, plot_beam_sweep
+        from .plots import (
+            plot_beam_basins,
+            plot_beam_branch,
+            plot_beam_scene,
+            plot_beam_sweep,
+        )
 
         if sweeps or scales:
             raise ParameterError("--over, --log, --linear: not for a beam file")
         with ds, _writing(args.output):
-            (plot_beam_scene if "time" in ds.dims else plot_beam_sweep)(ds, args.output)
+            draw = (plot_beam_scene if "time" in ds.dims else plot_beam_branch
+                    if "point" in ds.dims else plot_beam_basins if "attractor" in ds.dims
+                    else plot_beam_sweep)
+            draw(ds, args.output)
         return 0
     with ds, _writing(args.output), _complete(args.dataset):
         if "point" in ds.dims:
@@ -873,6 +914,34 @@ def _beam_series(series, outputs: dict, p: dict, preset: str):
     for key, value in defaults.items():
         ds.attrs.setdefault(key, value)
     return ds
+
+
+def _beam_branch_or_basins(args) -> int:
+    """beam-continue and beam-basins: the API's checks (one line, exit 2), then the run
+    and its CF netCDF file."""
+    from .beam_basins import beam_basins
+    from .beam_continuation import continue_beam_branch
+    from .beam_parameters import DEFAULT_BEAM_PRESET, resolve_beam_parameters
+    from .datasets import write_netcdf
+
+    _check_output(args.output, (".nc",))
+    overrides = dict(_beam_assignment(text) for text in args.assignments)
+    resolve_beam_parameters(args.preset, **overrides)
+    preset = args.preset or DEFAULT_BEAM_PRESET
+    _announce_beam_compilation()
+    if args.command == "beam-continue":
+        ds = continue_beam_branch(args.parameter, args.start, args.stop, preset,
+                                  step=args.step, max_points=args.max_points, **overrides)
+        found = int((ds["bifurcation"] > 0).sum())
+        what = f"{ds.sizes['point']} branch points, {found} bifurcation(s) located"
+    else:
+        ds = beam_basins(preset, samples=args.samples, seed=args.seed, box=args.box,
+                         **overrides)
+        what = f"{ds.sizes['attractor']} attractor(s) from {args.samples} starts"
+    with _writing(args.output):
+        write_netcdf(ds, args.output)
+    print(f"harvester-sweep: {what}: {args.output}", file=sys.stderr)
+    return 0
 
 
 def _beam_sweep(args) -> int:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .materials import hertz_stiffness_from_bodies
-from .outputs import OUTPUTS, STATUS_NAMES
+from .outputs import BIFURCATIONS, OUTPUTS, STATUS_NAMES
 from .parameters import PARAMETERS, ParameterError
 
 if TYPE_CHECKING:  # (matplotlib is imported where a figure is drawn: the command line's
@@ -848,4 +848,64 @@ def plot_beam_sweep(ds, path=None) -> Figure:
         raise ParameterError(f"the dataset has {len(grid)} grid axes ({', '.join(grid)}): "
                              "plot draws one or two; select a slice first")
     _suptitle(fig, f"beam model, preset {ds.attrs.get('preset', '')}")
+    return _save(fig, path)
+
+
+def plot_beam_branch(ds, path=None) -> Figure:
+    """A beam branch (``beam_continuation.continue_beam_branch``): power and tip x_max
+    [um] against the parameter, stable parts solid and unstable dashed, each located
+    bifurcation marked and labelled with its value."""
+    parameter = ds.attrs["parameter"]
+    x = ds[parameter].values
+    x_scale, x_shown = _display(_unit(ds, parameter), x)
+    fig = _new_figure((7.5, 6.5))
+    panels = fig.subplots(2, 1, sharex=True)
+    stable = ds["stable"].values.astype(bool)
+    names = list(BIFURCATIONS)
+    for ax, (name, unit) in zip(panels, (("power", "W"), ("x_max", "m"))):
+        y = ds[name].values
+        scale, shown = (1e-6, "\u00b5m") if unit == "m" else _display(unit, y)
+        for part, style in ((stable, "-"), (~stable, "--")):
+            ax.plot(x / x_scale, np.where(part, y, np.nan) / scale, "C0" + style, lw=1.2,
+                    label="stable" if style == "-" else "unstable")
+        for i in np.flatnonzero(ds["bifurcation"].values):
+            kind = names[int(ds["bifurcation"].values[i])]
+            ax.plot(x[i] / x_scale, y[i] / scale, ls="none", **_BIFURCATION_MARKS[kind])
+            ax.annotate(f"{_SHORT[kind]} {x[i] / x_scale:.6g}", (x[i] / x_scale, y[i] / scale),
+                        textcoords="offset points", xytext=(4, 4 + 10 * (i % 3)),
+                        fontsize="small")
+        ax.set_ylabel(f"{name} [{shown}]")
+        ax.grid(alpha=0.3)
+    panels[0].legend(fontsize="small")
+    panels[-1].set_xlabel(f"{parameter} [{x_shown}]")
+    _suptitle(fig, f"beam branch in {parameter}, preset {ds.attrs.get('preset', '')}")
+    return _save(fig, path)
+
+
+def plot_beam_basins(ds, path=None) -> Figure:
+    """Beam basins (``beam_basins.beam_basins``): each start in the first mode's plane
+    coloured by the attractor it reaches, and each attractor's basin fraction with its
+    standard error and its power."""
+    fig = _new_figure((11, 4.5))
+    left, right = fig.subplots(1, 2)
+    label = ds["sample_attractor"].values
+    for a in range(ds.sizes["attractor"]):
+        pick = label == a
+        left.plot(ds["start_eta_1"].values[pick], ds["start_eta_1_rate"].values[pick], "o",
+                  ms=3, color=f"C{a % 10}",
+                  label=f"attractor {a}: {int(ds['impacts_per_period'][a])} impact(s)/period")
+    if (label < 0).any():
+        left.plot(ds["start_eta_1"].values[label < 0], ds["start_eta_1_rate"].values[label < 0],
+                  "x", color="0.5", label="not settled")
+    left.set_xlabel("first mode at the start [m kg^0.5]")
+    left.set_ylabel("its rate [m kg^0.5/s]")
+    left.legend(fontsize="small")
+    fractions = ds["basin_fraction"].values
+    names = [f"{a}: {quantity_text(float(ds['power'][a]), 'W', 3)}"
+             for a in range(ds.sizes["attractor"])]
+    right.bar(names, fractions, yerr=ds["basin_fraction_error"].values,
+              color=[f"C{a % 10}" for a in range(len(names))])
+    right.set_ylabel("basin fraction [-]")
+    right.set_xlabel("attractor: its power")
+    _suptitle(fig, f"beam basins, preset {ds.attrs.get('preset', '')}")
     return _save(fig, path)

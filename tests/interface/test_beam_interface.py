@@ -275,3 +275,25 @@ def test_parameters_of_the_tip_mass_model_are_unchanged(capsys):
     first = {line.split()[0] for line in default.splitlines() if line.strip()}
     assert set(PARAMETERS) <= first
     assert "rod_modes" not in first
+
+
+def test_cli_branch_and_basins_write_their_datasets_and_plots(tmp_path, capsys):
+    branch, basins = tmp_path / "branch.nc", tmp_path / "basins.nc"
+    assert main(["beam-continue", "frequency", "200", "240", "--set", "n_modes=1",
+                 "--step", "0.05", "--out", str(branch)]) == 0
+    assert main(["beam-basins", "--set", "n_modes=1", "--set", "frequency=240",
+                 "--samples", "8", "--out", str(basins)]) == 0
+    err = capsys.readouterr().err
+    assert "branch points" in err and "attractor(s) from 8 starts" in err
+    with xr.open_dataset(branch) as ds:
+        assert ds.attrs["model"] == "beam" and ds.attrs["parameter"] == "frequency"
+        _cf_complete(ds)
+    with xr.open_dataset(basins) as ds:
+        assert float(ds["basin_fraction"].sum()) == pytest.approx(1.0)
+        _cf_complete(ds)
+    for path in (branch, basins):
+        figure = path.with_suffix(".png")
+        assert main(["plot", str(path), "--output", str(figure)]) == 0
+        assert figure.stat().st_size > 10_000
+    assert main(["beam-continue", "n_modes", "1", "2", "--out", str(branch)]) == 2
+    _one_line_error(capsys, ["parameter", "n_modes"])

@@ -4,6 +4,7 @@ reduced tip-mass model, its own corrector and location) puts them."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from harvester_sweep import bimorph as bm
@@ -37,6 +38,10 @@ def test_the_one_mode_beams_folds_and_grazing_are_the_tip_mass_models():
     inside = (beam["frequency"] > folds[0] + 1) & (beam["frequency"] < folds[1] - 1)
     assert set(beam["stable"].values[inside.values]) >= {0}
     assert beam["frequency"].values[-1] >= 280.0
+    # every point is measured on its own orbit, the unstable ones too (a measurement
+    # that ran on to the attractor jumped to the other branch's power)
+    power = beam["power"].values
+    assert np.abs(np.diff(power)).max() <= 0.2 * (power.max() - power.min())
 
 
 @pytest.mark.parametrize("kwargs, words", [
