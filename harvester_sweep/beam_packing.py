@@ -66,12 +66,25 @@ def beam_system(p: dict) -> BeamSystem:
         gamma=modes.forcing, phi_tip=modes.tip,
         phi_contact=modes.shape(contact_position(p))[:, 0], root_strain=strain,
         capacitance=beam.capacitance, resistance=p["resistance"], gap=p["gap"],
-        lower_gap=p["lower_gap"], rod_omega=() if rm is None else rm.omega,
-        rod_zeta=p["rod_damping_ratio"], rod_face=() if rm is None else rm.face,
-        rod_forcing=() if rm is None else rm.forcing)
+        lower_gap=p["lower_gap"], **_stop(p, rm))
     ch = (p["contact_damping"] if p["contact_damping"] is not None
           else contact_damping(p["contact_law"], p["restitution"], p["impact_velocity"]))
     return BeamSystem(modes, rm, system, ch, _scales(p, system))
+
+
+def _stop(p: dict, rm) -> dict:
+    """The stop's modes for models.beam.modal_system: a rod's; a stop on a spring as one
+    mode of mass m_s (its face 1/sqrt(m_s), its base forcing sqrt(m_s): a lumped body
+    feels m_s A); none for a rigid stop."""
+    if rm is not None:
+        return dict(rod_omega=rm.omega, rod_zeta=p["rod_damping_ratio"], rod_face=rm.face,
+                    rod_forcing=rm.forcing)
+    if p["stop_support_stiffness"] is not None:
+        m, k = p["stop_mass"], p["stop_support_stiffness"]
+        return dict(rod_omega=[math.sqrt(k / m)],
+                    rod_zeta=p["stop_support_damping"] / (2 * math.sqrt(k * m)),
+                    rod_face=[1 / math.sqrt(m)], rod_forcing=[math.sqrt(m)])
+    return {}
 
 
 def _linear_amplitudes(p: dict, system) -> np.ndarray:

@@ -90,6 +90,12 @@ BEAM_PARAMETERS: dict[str, Parameter] = {
            choices=tuple(MATERIALS)),
         _P("rod_damping_ratio", "1", "modal damping ratio of the rod stop", low=0, high=1,
            high_open=True),
+        _P("stop_mass", "kg", "mass m_s of a stop on a spring (with stop_support_stiffness; "
+           "unset: no such stop)", low=0, low_open=True, optional=True),
+        _P("stop_support_stiffness", "N/m", "stiffness k_s of the spring a lumped stop is "
+           "mounted on, on the shaking base (unset: a rigid or rod stop)", low=0,
+           low_open=True, optional=True),
+        _P("stop_support_damping", "N s/m", "damping c_s of a lumped stop's support", low=0),
         _P("rod_modulus", "Pa", "rod's Young's modulus (unset: the material's)", low=0,
            low_open=True, optional=True),
         _P("rod_density", "kg/m^3", "rod's density (unset: the material's)", low=0,
@@ -115,7 +121,8 @@ _TABLE_1_STOP = dict(damping_ratio=0.01, resistance=10e3, amplitude=1.0, frequen
                      max_periods=20000, n_modes=5, mode_damping_ratios=None,
                      substrate_modulus=None, substrate_density=None, piezo_modulus=None,
                      piezo_density=None, d31=None, permittivity=None, rod_modulus=None,
-                     rod_density=None)
+                     rod_density=None, stop_mass=None, stop_support_stiffness=None,
+                     stop_support_damping=0.0)
 
 
 def _preset(name: str) -> MappingProxyType:
@@ -176,6 +183,16 @@ def resolve_beam_parameters(preset: str | None = DEFAULT_BEAM_PRESET, **override
             f"mode_damping_ratios [-] = {value_text(list(ratios))}: must be "
             f"{BEAM_PARAMETERS['mode_damping_ratios'].range_text()} (n_modes = "
             f"{checked['n_modes']})")
+    lumped = checked["stop_support_stiffness"] is not None
+    if lumped != (checked["stop_mass"] is not None):
+        raise ParameterError(
+            "a stop on a spring needs both stop_mass [kg] > 0 and stop_support_stiffness "
+            "[N/m] > 0 (unset both: a rigid or rod stop)")
+    if lumped and (checked["rod_modes"] > 0 or checked["lower_gap"] is not None):
+        raise ParameterError(
+            f"stop_support_stiffness [N/m] = {value_text(checked['stop_support_stiffness'])}: "
+            "a stop on a spring is the upper stop, rigid otherwise: leave rod_modes 0 and "
+            "lower_gap unset")
     if checked["rod_modes"] > 0 and checked["lower_gap"] is not None:
         raise ParameterError(
             f"lower_gap [m] = {value_text(checked['lower_gap'])}: a second stop below beside a "
@@ -186,6 +203,12 @@ def resolve_beam_parameters(preset: str | None = DEFAULT_BEAM_PRESET, **override
     except ValueError as error:
         raise ParameterError(str(error)) from None
     return checked
+
+
+def moving_stop(p: dict) -> bool:
+    """Whether the stop of a validated parameter set moves (a rod, or a stop on a spring):
+    its face's displacement is then an output."""
+    return p["rod_modes"] > 0 or p["stop_support_stiffness"] is not None
 
 
 def contact_position(p: dict) -> float:

@@ -25,6 +25,7 @@ from .beam_parameters import (
     BEAM_PRESET_NOTES,
     DEFAULT_BEAM_PRESET,
     bimorph,
+    moving_stop,
     resolve_beam_parameters,
 )
 from .outputs import OUTPUTS, STATUS_FLAGS
@@ -411,8 +412,7 @@ def _dataset(sol: BeamSolution, points, axes, shape) -> xr.Dataset:
                                 {"units": "1", "long_name": "bending mode number"}))
     if "status" in ds:
         ds["status"].attrs.update(STATUS_FLAGS)
-    has_rod = any(p["rod_modes"] > 0 for p in points)
-    if not has_rod:  # a metric the model does not have is absent, not NaN
+    if not any(moving_stop(p) for p in points):  # a metric the model lacks: absent, not NaN
         ds = ds.drop_vars("stop_face_max")
     return ds
 
@@ -478,7 +478,7 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
                        {"units": "m", "long_name": "rod stop's face displacement"})},
         coords={"time": ("time", t, {"units": "s", "long_name": "time from the orbit's "
                                      "start"})})
-    if p["rod_modes"] == 0:
+    if not moving_stop(p):
         series = series.drop_vars("stop_face")
     outputs = {name: sol.values[name][0] for name in SCALARS}
     outputs["modal_amplitude"] = sol.values["modal_amplitude"][0]

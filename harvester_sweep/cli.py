@@ -827,6 +827,7 @@ def _beam_rows(outputs: dict, p: dict) -> list:
     """(name, value for JSON, unit, long_name) of each output of a beam point; one row per
     mode of ``modal_amplitude``; ``stop_face_max`` left out with a rigid stop; NaN as
     None."""
+    from .beam_parameters import moving_stop
     from .outputs import OUTPUTS
 
     def plain(name, value):
@@ -837,7 +838,7 @@ def _beam_rows(outputs: dict, p: dict) -> list:
 
     rows = []
     for name, value in outputs.items():
-        if name == "status" or (name == "stop_face_max" and p["rod_modes"] == 0):
+        if name == "status" or (name == "stop_face_max" and not moving_stop(p)):
             continue
         output = OUTPUTS.get(name)
         unit, long_name = (output.units, output.long_name) if output else ("", "")
@@ -852,7 +853,8 @@ def _beam_table(rows: list, p: dict, preset: str, status: str) -> str:
     """A beam point's outputs as a table, lengths in micrometres as in the other tables."""
     from .beam_parameters import BEAM_PRESET_NOTES, contact_position
 
-    stop = ("a rigid stop" if p["rod_modes"] == 0
+    stop = ("a stop on a spring" if p["stop_support_stiffness"] is not None
+            else "a rigid stop" if p["rod_modes"] == 0
             else f"a rod stop in {p['rod_modes']} modes")
     lines = [f"beam scene '{preset}': {p['n_modes']} bending modes striking {stop} at "
              f"{contact_position(p) / p['length']:.3g} L, gap = {p['gap'] / 1e-6:g} {_UM}, "
@@ -887,13 +889,14 @@ def _beam_series(series, outputs: dict, p: dict, preset: str):
     """The time history of beam_scene with what the file needs to stand alone: its
     outputs (CF attributes from outputs.OUTPUTS), preset and parameters, where beam_scene
     did not put them there itself."""
+    from .beam_parameters import moving_stop
     from .outputs import OUTPUTS, STATUS_FLAGS
 
     ds = series.copy()
     for name, value in outputs.items():
         if name in ds or name not in OUTPUTS:
             continue
-        if name == "stop_face_max" and p["rod_modes"] == 0:
+        if name == "stop_face_max" and not moving_stop(p):
             continue  # (a metric the model does not have is absent, not NaN)
         if name == "modal_amplitude":
             values = np.ravel(value)
