@@ -118,7 +118,7 @@ _TABLE_1_STOP = dict(damping_ratio=0.01, resistance=10e3, amplitude=1.0, frequen
                      impact_velocity=1.76e-3, contact_damping=None,
                      contact_law="lankarani_nikravesh", accuracy=1e-7,
                      settle_tolerance=1e-10, steps_per_period=None, contact_step=None,
-                     max_periods=20000, n_modes=5, mode_damping_ratios=None,
+                     max_periods=2000, n_modes=5, mode_damping_ratios=None,
                      substrate_modulus=None, substrate_density=None, piezo_modulus=None,
                      piezo_density=None, d31=None, permittivity=None, rod_modulus=None,
                      rod_density=None, stop_mass=None, stop_support_stiffness=None,

@@ -257,7 +257,10 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
     m, e, s = g.measure(todo, 0, states)
     coarse = {k: (point_outputs(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
     periods_run = {k: transient[k] + m[k, HEAD.periods_run] for k in todo}
-    done = {}
+    # a point that did not settle (or diverged) at the first step is reported as it is,
+    # with no estimate: a finer step would only run its whole budget again
+    done = {k: (coarse[k], math.nan) for k in todo if m[k, HEAD.status] != _SETTLED}
+    todo = [k for k in todo if k not in done]
     lv = 1
     while todo and lv <= MAX_LEVELS:
         packs = g.packs(todo, lv)
