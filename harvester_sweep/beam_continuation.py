@@ -98,13 +98,9 @@ def _tangent(jac: np.ndarray, previous=None) -> np.ndarray:
     return t
 
 
-def continue_beam_branch(parameter: str, start: float, stop: float,
-                         preset: str | None = DEFAULT_BEAM_PRESET, *, step: float = 0.01,
-                         max_points: int = 400, **overrides) -> xr.Dataset:
-    """The branch of periodic orbits (period one forcing period) of a beam point from
-    ``parameter`` = ``start`` towards ``stop`` (SI units), through folds, by
-    pseudo-arclength steps of ``step`` (in units of the range, halved where the corrector
-    fails, up to twice that after easy steps). Returns a CF dataset over ``point``."""
+def check_branch(parameter: str, start: float, stop: float, step: float,
+                 max_points: int) -> None:
+    """Refuse, in one line, a branch's options out of their ranges."""
     if parameter not in BEAM_PARAMETERS or BEAM_PARAMETERS[parameter].kind != "float":
         raise ParameterError(f"parameter {parameter!r}: must be a real beam parameter")
     for value in (start, stop):
@@ -113,6 +109,16 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
         raise ParameterError(f"step [-] = {step!r}: must be a number in (0, 0.2]")
     if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
         raise ParameterError(f"max_points [-] = {max_points!r}: must be an integer >= 2")
+
+
+def continue_beam_branch(parameter: str, start: float, stop: float,
+                         preset: str | None = DEFAULT_BEAM_PRESET, *, step: float = 0.01,
+                         max_points: int = 400, **overrides) -> xr.Dataset:
+    """The branch of periodic orbits (period one forcing period) of a beam point from
+    ``parameter`` = ``start`` towards ``stop`` (SI units), through folds, by
+    pseudo-arclength steps of ``step`` (in units of the range, halved where the corrector
+    fails, up to twice that after easy steps). Returns a CF dataset over ``point``."""
+    check_branch(parameter, start, stop, step, max_points)
     p = resolve_beam_parameters(preset, **overrides, **{parameter: start})
     first = solve_beam([p])
     if first.values["status"][0] != 0 or first.values["orbit_period"][0] != 1:

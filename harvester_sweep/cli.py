@@ -923,13 +923,15 @@ def _beam_branch_or_basins(args) -> int:
     """beam-continue and beam-basins: the API's checks (one line, exit 2), then the run
     and its CF netCDF file."""
     from .beam_basins import beam_basins
-    from .beam_continuation import continue_beam_branch
+    from .beam_continuation import check_branch, continue_beam_branch
     from .beam_parameters import DEFAULT_BEAM_PRESET, resolve_beam_parameters
     from .datasets import write_netcdf
 
     _check_output(args.output, (".nc",))
     overrides = dict(_beam_assignment(text) for text in args.assignments)
     resolve_beam_parameters(args.preset, **overrides)
+    if args.command == "beam-continue":
+        check_branch(args.parameter, args.start, args.stop, args.step, args.max_points)
     preset = args.preset or DEFAULT_BEAM_PRESET
     _announce_beam_compilation()
     if args.command == "beam-continue":
