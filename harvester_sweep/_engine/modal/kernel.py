@@ -98,6 +98,16 @@ def _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S):
 
 
 @njit(**JIT)
+def _reach(s, z, t, omega, pen, pl, pen_p, gap, D):
+    """Penetration [m] and rate [m/s] of surface s at (z, t): what the contact-free step
+    looks at (its rate's own rate is not needed there)."""
+    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    p = pen_p[s]
+    return (_dot_re(pen, s, z, D) + _phasor(p, sn, cs) - gap[s],
+            _dot_re(pl, s, z, D) + omega * _phasor(p, cs, -sn))
+
+
+@njit(**JIT)
 def _switch(kind, s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, ch, F, D, S):
     """A switching function of surface s and its rate at (z, t): the penetration [m]
     (TOUCH) or the clip's 1 + c_h r [-] (CLIP); the force is on where both are > 0."""
@@ -178,27 +188,26 @@ def _peak(s, z, t0, lo, hi, omega, lam, pen, pl, pl2, pen_p, pab, gap, zero, buf
 
 @njit(**JIT)
 def _lawson(z, t, tau, e1, eh, out, omega, pen, pl, pen_p, inp, gap, kh, ch, F, w2, w3, w4,
-            D, S):
+            stages, D, S):
     """One integrating-factor RK4 step of length tau [s] from z at t into out (e1, eh:
-    exp(lam tau), exp(lam tau / 2)); F holds the forces [N] at the step's end."""
+    exp(lam tau), exp(lam tau / 2)); F holds the forces [N] at the step's end; ``stages``
+    (3, S) is room for the first three stages' forces."""
     hh, h6 = 0.5 * tau, tau / 6.0
-    _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
-    f1 = F.copy()
+    f1, f2, f3 = stages[0], stages[1], stages[2]
+    _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, f1, D, S)
     for k in range(D):
         g = 0j
         for s in range(S):
             g += inp[s, k] * f1[s]
         w2[k] = eh[k] * (z[k] + hh * g)
         out[k] = e1[k] * (z[k] + h6 * g)
-    _forces(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
-    f2 = F.copy()
+    _forces(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, f2, D, S)
     for k in range(D):
         g = 0j
         for s in range(S):
             g += inp[s, k] * f2[s]
         w3[k] = eh[k] * z[k] + hh * g
-    _forces(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
-    f3 = F.copy()
+    _forces(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, f3, D, S)
     for k in range(D):
         g2, g3 = 0j, 0j
         for s in range(S):
@@ -296,6 +305,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     w2, w3, w4 = (np.empty(D, np.complex128), np.empty(D, np.complex128),
                   np.empty(D, np.complex128))
     e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
+    stages = np.empty((3, S))
     sub1 = np.empty((GRADES + 1, D), np.complex128)
     subh = np.empty((GRADES + 1, D), np.complex128)
     for g in range(GRADES + 1):
@@ -327,10 +337,8 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     _flow(lam, z, tau, zn, D)
                 best, bkind, bs = tau, 0, -1
                 for s in range(S):
-                    d0, r0, a0 = _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
-                                          D, S)
-                    d1, r1, a1 = _surface(s, zn, target, omega, pen, pl, pl2, pen_p, pab, gap,
-                                          zero, D, S)
+                    d0, r0 = _reach(s, z, t, omega, pen, pl, pen_p, gap, D)
+                    d1, r1 = _reach(s, zn, target, omega, pen, pl, pen_p, gap, D)
                     c0, c1 = hertz.clip(r0, ch[s]), hertz.clip(r1, ch[s])
                     if override == TOUCH:
                         d0 = min(d0, 0.0)
@@ -374,10 +382,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     tau = T - t
                     _exps(lam, tau, e1, eh, D)
                     _lawson(z, t, tau, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
-                            w2, w3, w4, D, S)
+                            w2, w3, w4, stages, D, S)
                 else:
                     _lawson(z, t, tau, sub1[grade], subh[grade], zn, omega, pen, pl, pen_p, inp,
-                            gap, kh, ch, F, w2, w3, w4, D, S)
+                            gap, kh, ch, F, w2, w3, w4, stages, D, S)
                 d1, r1, a1 = _surface(act, zn, t + tau, omega, pen, pl, pl2, pen_p, pab, gap, F,
                                       D, S)
                 c1 = hertz.clip(r1, ch[act])
@@ -401,7 +409,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             ts = 0.5 * (lo + hi)
                         _exps(lam, ts, e1, eh, D)
                         _lawson(z, t, ts, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
-                                w2, w3, w4, D, S)
+                                w2, w3, w4, stages, D, S)
                         fs, dfs = _switch(kind, act, zn, t + ts, omega, pen, pl, pl2, pen_p, pab,
                                           gap, ch, F, D, S)
                         if fs > 0.0:
