@@ -49,6 +49,7 @@ class BeamSystem:
     system: beam_model.LinearSystem
     contact_damping: float
     scale: np.ndarray
+    linear: np.ndarray  # |Y| (D,): each component's amplitude in the linear steady state
 
 
 def beam_system(p: dict) -> BeamSystem:
@@ -69,7 +70,8 @@ def beam_system(p: dict) -> BeamSystem:
         lower_gap=p["lower_gap"], **_stop(p, rm))
     ch = (p["contact_damping"] if p["contact_damping"] is not None
           else contact_damping(p["contact_law"], p["restitution"], p["impact_velocity"]))
-    return BeamSystem(modes, rm, system, ch, _scales(p, system))
+    linear = _linear_amplitudes(p, system)
+    return BeamSystem(modes, rm, system, ch, _scales(p, system, linear), linear)
 
 
 def _stop(p: dict, rm) -> dict:
@@ -95,14 +97,14 @@ def _linear_amplitudes(p: dict, system) -> np.ndarray:
                                   system.forcing * p["amplitude"]))
 
 
-def _scales(p: dict, system) -> np.ndarray:
+def _scales(p: dict, system, amp: np.ndarray) -> np.ndarray:
     """Each component's scale (D,), what the settle test and the divergence limit measure
-    it against. The modal coordinates are mass-normalised, so one displacement scale
+    it against (``amp``: the linear amplitudes). The modal coordinates are
+    mass-normalised, so one displacement scale
     serves every mode (beam's and rod's) and their rates take it times their own
     frequency: a norm of the motion's energy. That scale is the largest modal amplitude
     of the linear response, or where the stop caps the motion, the gap's share of the
     first mode; the voltage's is its linear amplitude."""
-    amp = _linear_amplitudes(p, system)
     M = system.matrix
     # the displacement coordinates: rows of M that say "its rate is that component"
     pairs = [(k, int(np.flatnonzero(row)[0])) for k, row in enumerate(M)
@@ -141,7 +143,7 @@ def contact_duration(p: dict, bs: BeamSystem) -> float:
     surface = bs.system.surfaces[0]
     mass = 1.0 / float(np.sum(surface ** 2))
     omega = 2 * math.pi * p["frequency"]
-    reach = float(np.abs(surface @ _linear_amplitudes(p, bs.system)))
+    reach = float(np.abs(surface @ bs.linear))
     velocity = max(omega * max(reach - p["gap"], reach * 1e-3), 1e-12)
     delta = hertz.penetration(0.5 * mass * velocity ** 2, p["hertz_stiffness"])
     # Hertz's impact of a mass: 2.94 delta_max / v
