@@ -12,16 +12,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.linalg
 
 from ._engine import modal
-from ._engine.modal import REAL, complex_fields, real_fields
+from ._engine.modal import REAL, RealFields, complex_fields, real_fields
 
 #: The largest condition number of the eigenvector basis accepted: beyond it the linear
 #: part is too near a defective matrix (two equal eigenvalues sharing one eigenvector)
 #: for its eigen-coordinates to keep the state's digits [-].
 MAX_CONDITION = 1e8
+#: A call whose work (forcing periods x grid steps per period, summed over its points) is
+#: below this runs on one thread: on a shared machine every thread of a call waits for the
+#: slowest, one that is descheduled most of all, and Newton's rounds make many such calls
+#: (as the lane engine's scheduler.SHORT_CALL) [grid steps].
+SHORT_CALL = 200_000
 
 
 @dataclass
@@ -111,7 +117,7 @@ def run(packs, starts) -> tuple:
     rrows = np.array([pk.rrow for pk in packs])
     metrics = np.empty((len(packs), modal.metric_size(K)))
     strobes = np.empty((len(packs), modal.SAMPLES, D))
-    modal.settle_points(crows, rrows, z, metrics, strobes, D, S, K)
+    modal.settle_points(crows, rrows, z, metrics, strobes, _threads(rrows, None), D, S, K)
     ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
     return metrics, ends, strobes
 
@@ -123,9 +129,22 @@ def map_states(packs, states, periods) -> tuple:
     D, S, K = packs[0].dims
     z = np.array([pk.to_modal(y) for pk, y in zip(packs, states)], dtype=complex)
     ok = np.empty(len(packs), dtype=bool)
-    modal.map_points(np.array([pk.crow for pk in packs]), np.array([pk.rrow for pk in packs]),
-                     z, np.asarray(periods, dtype=np.int64), ok, D, S, K)
+    rrows = np.array([pk.rrow for pk in packs])
+    periods = np.asarray(periods, dtype=np.int64)
+    modal.map_points(np.array([pk.crow for pk in packs]), rrows, z, periods, ok,
+                     _threads(rrows, periods), D, S, K)
     return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok
+
+
+def _threads(rrows, periods) -> int:
+    """Threads for a call of the engine on points ``rrows`` over ``periods`` each (None:
+    their budgets): one for a short call (SHORT_CALL), else numba's count, at most one per
+    point."""
+    f = RealFields(*real_fields(0, 0, 0))
+    periods = rrows[:, f.max_periods] if periods is None else periods
+    if float(np.sum(periods * rrows[:, f.steps])) < SHORT_CALL:
+        return 1
+    return max(1, min(numba.get_num_threads(), len(rrows)))
 
 
 def record_motion(packed: ModalPoint, start, periods: int, rows: int) -> np.ndarray:

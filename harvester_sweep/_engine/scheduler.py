@@ -18,12 +18,11 @@ import threading
 
 import numba
 import numpy as np
-from numba import njit, prange, types
-from numba.core import cgutils
-from numba.extending import intrinsic
+from numba import njit, prange
 
 from ..jit import JIT
 from . import lanes
+from .atomic import fetch_add
 from .layouts import (
     ACC,
     GROUP,
@@ -137,7 +136,7 @@ def _next_point(params, states, metrics, strobes, successors, queue, done, diver
             states[pt, :] = states[done, :]
     while control[len(control) - 1] == 0:
         if pt < 0:
-            taken = _fetch_add(control, len(control) - 2)
+            taken = fetch_add(control, len(control) - 2)
             if taken >= len(queue):
                 return -1
             pt = queue[taken]
@@ -150,24 +149,6 @@ def _next_point(params, states, metrics, strobes, successors, queue, done, diver
             states[following, :] = states[pt, :]
         pt = following
     return -1
-
-
-@intrinsic
-def _fetch_add(typingctx, counts, i):
-    """``counts[i] += 1`` as one atomic operation (int64 array); returns the value before."""
-    if not (isinstance(counts, types.Array) and counts.dtype == types.int64
-            and isinstance(i, types.Integer)):
-        return None
-
-    def codegen(context, builder, signature, args):
-        array, index = args
-        ary = context.make_array(signature.args[0])(context, builder, array)
-        index = context.cast(builder, index, signature.args[1], types.intp)
-        pointer = cgutils.get_item_pointer(context, builder, signature.args[0], ary, [index])
-        return builder.atomic_rmw("add", pointer, context.get_constant(types.int64, 1),
-                                  "monotonic")
-
-    return types.int64(counts, i), codegen
 
 
 @njit(inline="always", **JIT)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harvester_sweep import _engine, packing, resolve_parameters
-from harvester_sweep._engine import METRIC, PARAM, STATE, STATUS, scheduler
+from harvester_sweep._engine import METRIC, PARAM, STATE, STATUS, atomic, scheduler
 
 FREQUENCIES = np.linspace(120.0, 300.0, 12)  # [Hz] through the impacting band and out
 
@@ -118,11 +118,11 @@ def test_progress_is_reported_as_points_finish_and_an_error_stops_the_run(monkey
 
 @numba.njit(parallel=True)
 def _take_all(counts, n):
-    """Two threads take n values each from counts[1] with scheduler._fetch_add."""
+    """Two threads take n values each from counts[1] with atomic.fetch_add."""
     taken = np.empty(2 * n, dtype=np.int64)
     for thread in numba.prange(2):
         for i in range(n):
-            taken[thread * n + i] = scheduler._fetch_add(counts, 1)
+            taken[thread * n + i] = atomic.fetch_add(counts, 1)
     return taken
 
 

@@ -35,6 +35,33 @@ def test_point_independent_of_threads_and_neighbours():
     np.testing.assert_array_equal(runs[0].finals[1], alone.state)
 
 
+def test_beam_point_independent_of_threads_and_neighbours():
+    """Beam points of very different cost (one that does not settle in its budget, one on a
+    period-2 orbit, others that settle in a few periods, one clear of the stop) solved
+    together on one and two threads, and one of them alone: the same bits (the modal
+    engine deals its points from a shared counter, in an order that depends on the
+    threads' timing)."""
+    from harvester_sweep.beam_parameters import resolve_beam_parameters
+    from harvester_sweep.beam_runs import solve_beam
+
+    points = [resolve_beam_parameters("bimorph_tip", n_modes=2, frequency=f, gap=g,
+                                      max_periods=300)
+              for f, g in ((180.0, 1e-6), (155.0, 1e-6), (150.0, 3e-6), (140.0, 1.0),
+                           (128.0, 1e-6))]
+    runs = []
+    for threads in (1, 2):
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        runs.append(solve_beam(points))
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    assert list(runs[0].values["status"][:2]) == [1, 0]  # (not settled; settled)
+    assert runs[0].values["orbit_period"][1] == 2
+    alone = solve_beam(points[1:2])
+    for name, values in runs[0].values.items():
+        np.testing.assert_array_equal(values, runs[1].values[name])
+        np.testing.assert_array_equal(values[1], alone.values[name][0])
+    np.testing.assert_array_equal(np.array(runs[0].ends), np.array(runs[1].ends))
+
+
 def test_point_same_bits_in_every_lane():
     """The same point in four different vectors and lanes of a queue, among other points
     (some striking the stop, some not), on one and two threads: the same bits each time."""

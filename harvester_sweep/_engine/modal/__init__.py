@@ -3,8 +3,8 @@
 frame of the linear flow inside them (:mod:`.kernel`), many points in parallel.
 
 Its machine code is cached apart from the lane engine's: its digest covers its own files,
-the Hertz law, the Hermite interpolant and the flags, so that editing one engine never
-recompiles the other.
+the Hertz law, the Hermite interpolant, the atomic counter and the flags, so that editing
+one engine never recompiles the other.
 """
 
 from __future__ import annotations
@@ -15,14 +15,24 @@ from ...models import hertz
 from .. import cache, hermite
 from . import kernel, layout
 from .kernel import SAMPLES, map_points, record_samples, settle_points
-from .layout import COMPLEX, HEAD, METRIC_HEAD, REAL, complex_fields, metric_size, real_fields
+from .layout import (
+    COMPLEX,
+    HEAD,
+    METRIC_HEAD,
+    REAL,
+    RealFields,
+    complex_fields,
+    metric_size,
+    real_fields,
+)
 
 _HERE = Path(__file__).parent
 SOURCE_DIGEST = cache.source_digest((_HERE, _HERE.parent / "hermite.py",
+                                     _HERE.parent / "atomic.py",
                                      _HERE.parent.parent / "models" / "hertz.py",
                                      _HERE.parent.parent / "jit.py"))
 cache.flush_if_changed(kernel.settle_points, (kernel, layout), SOURCE_DIGEST)
 
-__all__ = ["COMPLEX", "HEAD", "METRIC_HEAD", "REAL", "SAMPLES", "SOURCE_DIGEST",
+__all__ = ["COMPLEX", "HEAD", "METRIC_HEAD", "REAL", "SAMPLES", "RealFields", "SOURCE_DIGEST",
            "complex_fields", "hermite", "hertz", "map_points", "metric_size", "real_fields",
            "record_samples", "settle_points"]

@@ -32,6 +32,7 @@ from numba import njit, prange
 from ...jit import JIT
 from ...models import hertz
 from .. import hermite
+from ..atomic import fetch_add
 from .layout import HEAD, complex_fields, real_fields
 
 #: Sub-steps after a touch start at substep / 2^GRADES and double up to substep: the
@@ -551,13 +552,19 @@ def run_point(c, r, z, metrics, ring, D, S, K):
 
 
 @njit(parallel=True, **JIT)
-def settle_points(crows, rrows, z, metrics, strobes, D, S, K):
+def settle_points(crows, rrows, z, metrics, strobes, threads, D, S, K):
     """Every point (complex rows (n, ...), real rows (n, ...), eigen-coordinates z (n, D),
     replaced by the end) to steady state: metrics (n, metric_size(K)), strobes
     (n, SAMPLES, D). Each point is run alone, so its numbers do not depend on the
-    threads or the other points."""
-    for i in prange(crows.shape[0]):
-        run_point(crows[i], rrows[i], z[i], metrics[i], strobes[i], D, S, K)
+    threads or the other points. Each of ``threads`` threads takes the next point from a
+    shared counter, so that one slow point does not hold back others dealt to its thread."""
+    n = crows.shape[0]
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(threads):
+        i = fetch_add(taken, 0)
+        while i < n:
+            run_point(crows[i], rrows[i], z[i], metrics[i], strobes[i], D, S, K)
+            i = fetch_add(taken, 0)
 
 
 @njit(**JIT)
@@ -580,19 +587,31 @@ def record_samples(c, r, z, periods, rec, D, S, K):
 
 
 @njit(parallel=True, **JIT)
-def map_points(crows, rrows, z, periods, ok, D, S, K):
+def map_points(crows, rrows, z, periods, ok, threads, D, S, K):
     """The period map: every point (rows as settle_points) from z (n, D), replaced by its
-    state after periods[i] forcing periods; ok[i] is False where the run diverged."""
-    for i in prange(crows.shape[0]):
-        (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
-         strobe, y_p, scale) = _tables(crows[i], rrows[i], D, S, K)
-        r = rrows[i]
-        omega, steps, substep, limit, volt = r[0], int(r[1]), r[2], r[5], int(r[7])
-        st = _start(z[i], omega, pen, pen_p, pl, gap, ch, D, S)
-        acc = np.zeros(len(HEAD) + 2 * K)
-        buf = np.zeros((SAMPLES, D))
-        _, status, _, _ = _advance(z[i], st, periods[i], False, np.empty((0, 1)), -1, omega,
-                                   2.0 * math.pi / omega, steps, substep, lam, grid, pen, pl,
-                                   pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
-                                   volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
-        ok[i] = status != DIVERGED
+    state after periods[i] forcing periods on ``threads`` threads; ok[i] is False where
+    the run diverged."""
+    n = crows.shape[0]
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(threads):  # (points taken as settle_points does)
+        i = fetch_add(taken, 0)
+        while i < n:
+            ok[i] = _map_point(crows[i], rrows[i], z[i], periods[i], D, S, K)
+            i = fetch_add(taken, 0)
+
+
+@njit(**JIT)
+def _map_point(c, r, z, periods, D, S, K):
+    """One point of map_points: z (D,) replaced by its state after ``periods`` forcing
+    periods; False where the run diverged."""
+    (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
+     strobe, y_p, scale) = _tables(c, r, D, S, K)
+    omega, steps, substep, limit, volt = r[0], int(r[1]), r[2], r[5], int(r[7])
+    st = _start(z, omega, pen, pen_p, pl, gap, ch, D, S)
+    acc = np.zeros(len(HEAD) + 2 * K)
+    buf = np.zeros((SAMPLES, D))
+    _, status, _, _ = _advance(z, st, periods, False, np.empty((0, 1)), -1, omega,
+                               2.0 * math.pi / omega, steps, substep, lam, grid, pen, pl,
+                               pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
+                               volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
+    return status != DIVERGED
