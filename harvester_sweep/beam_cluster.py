@@ -1,40 +1,30 @@
-"""The beam's sweeps on a Dask cluster: a local one of N worker processes, or a running
-dask.distributed scheduler.
+"""The beam's sweeps in chunks kept as they finish: a sweep file of ``model = "beam"`` (or
+a grid given in Python) run in this process or on a Dask cluster (a local one of N worker
+processes, or a running dask.distributed scheduler), each finished chunk saved at once in
+``OUT.nc.partial/`` (chunk_store) so that an interrupted run, a lost worker or a full
+disk loses only the chunks under way and ``resume`` computes the rest.
 
-The grid is cut into chunks: of points where no line is swept, of whole lines along
-frequency where they are (each chunk sweeps its own lines up or down, so that a line's
-continuation stays in one task). A worker solves its chunk with the functions a local run
-uses (``beam_runs.solve_beam``, ``beam_runs._swept``), each point alone, so the numbers
-are the same bits as the local run's; the chunks come back to this process to be gathered
-into the same dataset.
+A chunk is points where no line is swept, whole lines of one direction where they are
+(each line continued along frequency from the previous point's orbit stays in one chunk).
+It is solved by chunks.beam_chunk with the functions beam_runs.beam_sweep uses, each
+point alone, so the dataset is beam_sweep's bit for bit whatever the chunking, the worker
+or the interruptions.
 """
 
 from __future__ import annotations
 
-import math
 import numbers
-import time
-from concurrent.futures import CancelledError
-from functools import partial
+import sys
+from types import SimpleNamespace
 
 import numpy as np
 
-from .beam_parameters import DEFAULT_BEAM_PRESET
-from .beam_runs import BeamSolution, _swept, beam_sweep, solve_beam
-from .cluster import (
-    NO_WORKERS_SECONDS,
-    POLL_SECONDS,
-    ClusterError,
-    _workers,
-    check_scheduler,
-    connect,
-    threads_per_worker,
-)
+from .beam_parameters import DEFAULT_BEAM_PRESET, moving_stop
+from .chunk_store import ChunkStore, MemoryStore, write_failure
+from .chunks import beam_chunk, chunk_points
+from .cluster import check_scheduler
 from .parameters import ParameterError, is_number, value_text
-
-#: Chunks per worker thread when ``chunk_size`` is not given: a slow chunk (many contact
-#: modes, a point that does not settle) evens out among the others [-].
-CHUNKS_PER_THREAD = 4
+from .sweep_file import load_sweep
 
 
 def check_cluster(workers, scheduler):
@@ -49,43 +39,210 @@ def check_cluster(workers, scheduler):
     return workers
 
 
+def beam_source(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
+                chunk_size: int | None = None, **fixed) -> dict:
+    """The sweep file (as a dict) of a grid given as beam_runs.beam_sweep takes it:
+    ``axes`` (name -> values, SI units), ``directions`` ("up", "down", both or None),
+    ``chunk_size`` points per chunk of an unswept grid, lines per chunk of a swept one
+    (None: the sweep file's default)."""
+    directions = (directions,) if isinstance(directions, str) else directions
+    sweep = {"directions": list(directions)} if directions else {}
+    if chunk_size is not None:
+        length = len(axes.get("frequency", ())) if directions else 1
+        sweep["chunk_size"] = _whole("chunk_size", chunk_size) * max(length, 1)
+    return {"model": "beam", "preset": preset or DEFAULT_BEAM_PRESET, "parameters": fixed,
+            "grid": {name: np.asarray(values) for name, values in axes.items()},
+            "sweep": sweep}
+
+
 def run_beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
                    progress=None, *, workers: int | None = None, scheduler: str | None = None,
-                   chunk_size: int | None = None, **fixed):
-    """:func:`beam_runs.beam_sweep` (the same arguments and dataset), its grid run on Dask.
+                   chunk_size: int | None = None, output=None, resume: bool = False,
+                   **fixed):
+    """:func:`beam_runs.beam_sweep` (the same arguments and dataset, the frequency axis
+    ascending where lines are swept) run in chunks by :func:`run_beam_file`: kept in
+    ``output`` as they finish, resumable, on Dask with ``workers`` or ``scheduler``.
+
+    ``chunk_size``: points per chunk of an unswept grid, lines per chunk of a swept one
+    (default: a sweep file's, sweep_file.DEFAULT_BEAM_CHUNK_SIZE points, at least
+    DEFAULT_BEAM_CHUNK_LINES lines).
+    """
+    if chunk_size is not None:
+        chunk_size = _whole("chunk_size", chunk_size)
+    return run_beam_file(beam_source(axes, preset, directions, chunk_size, **fixed), output,
+                         resume=resume, progress=progress, workers=workers,
+                         scheduler=scheduler)
+
+
+def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
+                  workers: int | None = None, scheduler: str | None = None,
+                  announce: bool = False):
+    """Run a beam sweep and return its dataset (also written to ``output`` when given).
 
     Parameters
     ----------
+    sweep : str, pathlib.Path, dict or SweepSpec
+        A TOML sweep file with ``model = "beam"`` or a dict of the same shape (see
+        :mod:`harvester_sweep.sweep_file`).
+    output : str or pathlib.Path, optional
+        netCDF file to write. Finished chunks are kept in ``<output>.partial/`` until the
+        file is complete.
+    resume : bool
+        Finish the partial result of an interrupted run of the same sweep (its chunks
+        checked by their seals). Without it, an existing partial result is refused rather
+        than overwritten.
+    progress : callable, optional
+        ``progress(done, total, what)``: in this process after each frequency step of a
+        chunk's lines (or each chunk of points), ``total`` the steps still to run; on Dask
+        once per chunk that comes back, ``total`` the chunks still to run.
     workers : int, optional
         Run the chunks on a new local Dask cluster of this many worker processes.
     scheduler : str, optional
-        Run them on the running dask.distributed scheduler at this address
-        (e.g. ``"tcp://127.0.0.1:8786"``); its workers must have harvester_sweep installed.
-        With neither, the grid is solved in this process (``beam_sweep``).
-    chunk_size : int, optional
-        Points per chunk of an unswept grid, lines along frequency per chunk (of one
-        direction) of a swept one; default: about CHUNKS_PER_THREAD chunks per worker
-        thread.
-    progress : callable, optional
-        ``progress(done, total, what)`` once per finished chunk (``total`` chunks).
+        Run them on the running dask.distributed scheduler at this address (e.g.
+        ``"tcp://127.0.0.1:8786"``); its workers must have harvester_sweep installed.
+    announce : bool
+        Say the sweep's size on stderr before it starts (the command line's, unless
+        ``--quiet``).
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`beam_runs.beam_sweep`'s: one dimension per grid axis, ``direction``
+        where lines are swept, ``mode``; ``model`` = "beam".
 
     Raises
     ------
     ParameterError
-        Bad input (the grid's points, workers, scheduler, chunk_size), dask.distributed
-        not installed, or a scheduler that cannot be reached: before anything is solved.
+        Before anything is solved: a bad sweep, a partial result of another sweep, an
+        output another run is writing, bad workers or scheduler, dask.distributed not
+        installed or a scheduler that cannot be reached.
+    chunk_store.StoreError
+        (a ParameterError) When the output or a chunk cannot be written; the finished
+        chunks are kept for ``resume``.
     cluster.ClusterError
-        (a ParameterError) A chunk's workers kept dying, the connection to the scheduler
-        was lost, or no worker was left for NO_WORKERS_SECONDS: one line, the sweep lost.
+        (a ParameterError) When dask cannot finish the chunks (workers that keep dying,
+        the scheduler lost, none left); every chunk that came back is kept for ``resume``.
     """
+    from .sweep import _load
+
+    spec = load_sweep(sweep, model="beam")
+    if output is not None and not str(output).lower().endswith(".nc"):
+        raise ParameterError(f"output = {str(output)!r}: the file name must end in .nc (the "
+                             "file is netCDF)")
     workers = check_cluster(workers, scheduler)
-    if chunk_size is not None:
-        chunk_size = _whole("chunk_size", chunk_size)
-    if workers is None and scheduler is None:
-        return beam_sweep(axes, preset, directions, progress, **fixed)
-    solver = partial(solve_on_dask, workers=workers, scheduler=scheduler,
-                     chunk_size=chunk_size)
-    return beam_sweep(axes, preset, directions, progress, solver=solver, **fixed)
+    store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
+    with store:  # (holds the output's lock until the file is written)
+        finished = {chunk for chunk in store.present() if store.has(chunk)}
+        todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]
+        remaining = sum(chunk_points(spec, chunk) for chunk in todo)
+        # What the run is, said before any work. The beam's run-time estimate (and, as
+        # run_sweep does, the refusal of a run beyond an hour unless confirmed) belongs
+        # here, from run_estimate, with ``spec``, ``remaining`` and the threads.
+        if announce:
+            print(f"harvester-sweep: {_size(spec, remaining)}", file=sys.stderr, flush=True)
+
+        def compute(chunks):
+            if workers is None and scheduler is None:
+                _run_here(spec, chunks, store, progress)
+            else:
+                from .cluster import run_on_dask
+
+                told = _Told(store, spec, len(chunks), progress)
+                run_on_dask(spec, chunks, told, SimpleNamespace(update=lambda n: None),
+                            workers, scheduler)
+
+        compute(todo)
+        results = [_load(store, chunk, compute) for chunk in range(spec.n_chunks)]
+        ds = beam_dataset(spec, results)
+        if output is not None:
+            from .datasets import write_netcdf
+
+            try:
+                write_netcdf(ds, output)
+            except OSError as error:
+                raise store.unwritten(output, write_failure(output, error, ds.nbytes)) \
+                    from None
+            store.remove()
+    return ds
+
+
+def beam_dataset(spec, results: list):
+    """The dataset of a beam sweep ``spec`` from its chunks' results (in chunk order, as
+    chunks.beam_chunk returns them): beam_runs.beam_sweep's, bit for bit."""
+    from .beam_runs import SCALARS, _dataset
+
+    lines = {name: np.concatenate([r[name] for r in results])
+             for name in ("values", "modal_amplitude")}
+    # (lines, points of a line, ...) -> the grid's axes in the file's order, a direction
+    # first where lines are swept
+    axes = list(spec.grid)
+    dirs = len(spec.directions) if spec.continuation else 1
+    along = 1 + (axes.index("frequency") if spec.continuation else len(axes))
+    per_direction = []
+    for name, values in lines.items():
+        grid = values.reshape((dirs,) + tuple(len(spec.grid[a]) for a in spec.line_axes)
+                              + (spec.line_length,) + values.shape[2:])
+        grid = np.moveaxis(grid, 1 + len(spec.line_axes), along)
+        per_direction.append(grid.reshape((dirs, spec.n_points // dirs) + values.shape[2:]))
+    values, amplitude = per_direction
+    solved = []
+    for d in range(dirs):
+        outputs = {name: values[d, :, k] for k, name in enumerate(SCALARS)}
+        outputs["modal_amplitude"] = amplitude[d]
+        solved.append(outputs)
+    first = spec.point_parameters(spec.values_at(0))  # (each axis's first value)
+    # the stop moves at some point where it does at the grid's largest rod_modes (and a
+    # stop on a spring is one at every point)
+    corner = dict(spec.base, **{a: spec.grid[a].max() for a in spec.grid})
+    return _dataset(solved, spec.grid, spec.directions, first, moving_stop(corner),
+                    spec.preset)
+
+
+def _run_here(spec, chunks, store, progress) -> None:
+    """Solve ``chunks`` in this process, each saved as it finishes; ``progress`` told after
+    each frequency step of a chunk's lines (each chunk of points)."""
+    steps = spec.line_length if spec.continuation else 1
+    total = steps * len(chunks)
+    for k, chunk in enumerate(chunks):
+        told = None
+        if progress is not None:
+            def told(done, _, what, chunk=chunk, base=k * steps):
+                progress(base + done, total, f"chunk {chunk + 1}: {what}")
+        store.save(chunk, beam_chunk(spec, chunk, told))
+
+
+class _Told:
+    """A chunk store that tells ``progress(done, total, what)`` of each chunk saved:
+    cluster.run_on_dask saves each chunk as it comes back."""
+
+    def __init__(self, store, spec, total: int, progress):
+        self.store, self.spec, self.total, self.progress = store, spec, total, progress
+        self.done = 0
+
+    def save(self, chunk, result) -> None:
+        self.store.save(chunk, result)
+        self.done += 1
+        if self.progress is not None:
+            self.progress(self.done, self.total, f"chunk {chunk + 1}: {_what(self.spec, chunk)}")
+
+    def kept_text(self) -> str:
+        return self.store.kept_text()
+
+
+def _what(spec, chunk: int) -> str:
+    """A chunk in words: its points, or its direction, lines and frequencies."""
+    lines = spec.chunk_lines(chunk)
+    if not spec.continuation:
+        return f"{len(lines)} points"
+    direction = spec.directions[lines[0] * len(spec.directions) // spec.n_lines]
+    return f"{direction} sweep, {len(lines)} line(s) of {spec.line_length} frequencies"
+
+
+def _size(spec, remaining: int) -> str:
+    """The run's size in words: points, chunks, and what a resumed run has left."""
+    todo = "" if remaining == spec.n_points else f" ({remaining:,} still to run)"
+    return (f"{spec.n_points:,} beam point{'s' if spec.n_points != 1 else ''}{todo} in "
+            f"{spec.n_chunks:,} chunk{'s' if spec.n_chunks != 1 else ''}")
 
 
 def _whole(name: str, value) -> int:
@@ -94,144 +251,4 @@ def _whole(name: str, value) -> int:
     return int(value)
 
 
-def solve_on_dask(points, axes, shape, directions=None, progress=None, *, workers=None,
-                  scheduler=None, chunk_size=None) -> list:
-    """``beam_runs.solve_grid`` on Dask (its arguments and result; see run_beam_sweep for
-    the keywords): the chunks submitted at once, every direction's, and gathered as they
-    finish."""
-    client, cluster = connect(workers, scheduler)
-    try:
-        threads = threads_per_worker(workers) if cluster is not None else None
-        size = chunk_size or _default_size(points, shape, axes, directions, client)
-        tasks = _chunks(len(points), axes, shape, directions, size)
-        results = _gather(client, points, axes.get("frequency"), tasks, threads, progress)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return [_assemble(len(points), [(ids, results[k]) for k, (d, ids) in enumerate(tasks)
-                                     if d == direction])
-            for direction in (directions or (None,))]
-
-
-def _lines(axes, shape) -> np.ndarray:
-    """The grid's lines along frequency: (lines, points of a line) indices of the points,
-    as beam_runs._swept orders them."""
-    f_axis = list(axes).index("frequency")
-    grid = np.arange(math.prod(shape)).reshape(shape)
-    return np.moveaxis(grid, f_axis, -1).reshape(-1, shape[f_axis])
-
-
-def _default_size(points, shape, axes, directions, client) -> int:
-    """Points (or lines) per chunk for about CHUNKS_PER_THREAD chunks per worker thread,
-    the directions' chunks together."""
-    threads = max(1, sum(client.nthreads().values()))
-    if not directions:
-        return max(1, math.ceil(len(points) / (CHUNKS_PER_THREAD * threads)))
-    lines = len(_lines(axes, shape)) * len(directions)
-    return max(1, math.ceil(lines / (CHUNKS_PER_THREAD * threads)))
-
-
-def _chunks(n, axes, shape, directions, size) -> list:
-    """The tasks: (direction or None, indices of its points: (points,) or (lines, line
-    length))."""
-    if not directions:
-        return [(None, np.arange(a, min(a + size, n))) for a in range(0, n, size)]
-    lines = _lines(axes, shape)
-    return [(d, lines[a:a + size]) for d in directions for a in range(0, len(lines), size)]
-
-
-def _solve_chunk(points, direction, frequencies, threads) -> BeamSolution:
-    """One chunk on a worker: its points solved each from rest, or its lines (``points``
-    line after line, each at the frequency axis's values ``frequencies``) swept in
-    ``direction``; without the strobes (nor, swept, the end states)."""
-    if threads is not None:
-        import numba
-
-        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    if direction is None:
-        sol = solve_beam(points)
-        return BeamSolution(sol.values, sol.ends, None)
-    shape = [len(points) // len(frequencies), len(frequencies)]
-    sol = _swept(points, {"line": None, "frequency": frequencies}, shape, direction)
-    return BeamSolution(sol.values, None, None)
-
-
-def _gather(client, points, frequencies, tasks, threads, progress) -> dict:
-    """Each task's BeamSolution (task index -> solution), progress told per chunk; a
-    chunk lost is a ClusterError at once (the others cancelled)."""
-    from dask.distributed import wait
-    from distributed import KilledWorker
-
-    futures = {}
-    for k, (direction, ids) in enumerate(tasks):
-        chunk = [points[i] for i in np.ravel(ids)]
-        futures[client.submit(_solve_chunk, chunk, direction, frequencies, threads,
-                              pure=False)] = k
-    results, pending, alone_since = {}, set(futures), None
-    while pending:
-        try:
-            done, pending = wait(pending, timeout=POLL_SECONDS, return_when="FIRST_COMPLETED")
-        except TimeoutError:  # (none finished within POLL_SECONDS)
-            done = set()
-        for future in done:
-            k = futures[future]
-            why = None
-            try:
-                results[k] = future.result()
-            except KilledWorker:
-                why = "the workers running it kept dying (dask's KilledWorker)"
-            except CancelledError:
-                why = "dask cancelled it (the scheduler restarted or forgot it)"
-            except (OSError, TimeoutError) as error:  # (CommClosedError among them)
-                why = f"the connection to the scheduler was lost ({error})"
-            except ImportError as error:
-                why = (f"a worker cannot import it ({error}): harvester_sweep must be "
-                       "installed on every worker")
-            if why is not None:
-                client.cancel(list(pending))
-                raise ClusterError(f"chunk {k + 1} of {len(tasks)} of the beam sweep did not "
-                                   f"come back from dask: {why}; nothing was written")
-            future.release()
-            if progress is not None:
-                direction, ids = tasks[k]
-                what = (f"{ids.size} points" if direction is None else
-                        f"{direction} sweep, {len(ids)} line(s) of {ids.shape[1]} frequencies")
-                progress(len(results), len(tasks), f"chunk {k + 1}: {what}")
-        if done or not pending or _workers(client) > 0:
-            alone_since = None
-        elif alone_since is None:
-            alone_since = time.monotonic()
-        elif time.monotonic() - alone_since > NO_WORKERS_SECONDS:
-            client.cancel(list(pending))
-            raise ClusterError(f"{len(pending)} of {len(tasks)} chunks of the beam sweep did "
-                               f"not come back from dask: no dask worker was left for "
-                               f"{NO_WORKERS_SECONDS:g} s; nothing was written")
-    return results
-
-
-def _assemble(n: int, parts: list) -> BeamSolution:
-    """One direction's BeamSolution over the grid's ``n`` points from its chunks' ((point
-    indices, BeamSolution) each); ``modal_amplitude`` NaN beyond a chunk's own modes, as
-    solve_beam pads it."""
-    values, ends = {}, [None] * n
-    for ids, sol in parts:
-        flat = np.ravel(ids)
-        for name, v in sol.values.items():
-            v = np.asarray(v)
-            if name not in values:
-                values[name] = np.full((n,) + v.shape[1:], np.nan)
-            elif v.ndim > 1 and v.shape[1] > values[name].shape[1]:
-                wider = np.full((n, v.shape[1]), np.nan)
-                wider[:, :values[name].shape[1]] = values[name]
-                values[name] = wider
-            if v.ndim == 1:
-                values[name][flat] = v
-            else:
-                values[name][flat, :v.shape[1]] = v
-        for i, end in zip(flat, sol.ends if sol.ends is not None else ()):
-            ends[i] = end
-    return BeamSolution(values, ends, None)
-
-
-__all__ = ["run_beam_sweep", "solve_on_dask"]
+__all__ = ["beam_dataset", "beam_source", "check_cluster", "run_beam_file", "run_beam_sweep"]

@@ -311,16 +311,18 @@ def points_of(preset: str | None, fixed: dict, axes: dict) -> tuple[list, list]:
 
 
 def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
-               progress=None, *, solver=None, **fixed) -> xr.Dataset:
+               progress=None, **fixed) -> xr.Dataset:
     """Steady states of the beam over a grid (``axes``: parameter name -> values, SI
-    units). With ``directions`` ("up", "down" or both) and a ``frequency`` axis, each line
-    along frequency is swept in that direction, every point starting from the previous
-    one's orbit (the stop's hysteresis); otherwise every point starts from its linear
-    steady state. ``progress(done, total, what)``, if given, is called after each step of
-    the lines (or once for an unswept grid). Returns a CF dataset (``model`` = "beam").
+    units), solved in this process and kept in memory. With ``directions`` ("up", "down"
+    or both) and a ``frequency`` axis, each line along frequency is swept in that
+    direction, every point starting from the previous one's orbit (the stop's
+    hysteresis); otherwise every point starts from its linear steady state.
+    ``progress(done, total, what)``, if given, is called after each step of the lines (or
+    once for an unswept grid). Returns a CF dataset (``model`` = "beam").
 
-    ``solver``, if given, solves the checked grid instead of :func:`solve_grid` (with its
-    arguments and result): beam_cluster.run_beam_sweep passes one that runs it on Dask."""
+    The same grid in chunks kept as they finish (an output file, ``resume``), or on Dask:
+    beam_cluster.run_beam_sweep, or a sweep file run by beam_cluster.run_beam_file; the
+    numbers are these, bit for bit."""
     kinds = {"float": float, "int": np.int64}
     for name in axes:
         if name not in BEAM_PARAMETERS:
@@ -335,16 +337,9 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
     if directions and "frequency" not in axes:
         raise ParameterError("directions [-]: a sweep up or down needs a frequency axis")
     points, shape = points_of(preset, fixed, axes)
-    solved = (solver or solve_grid)(points, axes, shape, directions, progress)
-    if not directions:
-        ds = _dataset(solved[0], points, axes, shape)
-    else:
-        parts = [_dataset(sol, points, axes, shape) for sol in solved]
-        ds = xr.concat(parts, dim=xr.DataArray(list(directions), dims="direction",
-                                               name="direction"))
-        ds["direction"].attrs = {"long_name": "direction of the frequency sweep",
-                                 "units": "1"}
-    return _attributes(ds, points[0], preset, fixed)
+    solved = solve_grid(points, axes, shape, directions, progress)
+    return _dataset([sol.values for sol in solved], axes, directions, points[0],
+                    any(moving_stop(p) for p in points), preset or DEFAULT_BEAM_PRESET)
 
 
 def solve_grid(points, axes, shape, directions=None, progress=None) -> list:
@@ -395,12 +390,32 @@ def _swept(points, axes, shape, direction, progress=None, part=(0, 1)) -> BeamSo
     return out
 
 
-def _dataset(sol: BeamSolution, points, axes, shape) -> xr.Dataset:
+def _dataset(solved: list, axes: dict, directions, first: dict, moving: bool,
+             preset: str) -> xr.Dataset:
+    """The CF dataset of a grid solved: ``solved`` one dict of outputs (as
+    BeamSolution.values, over the points in the order of itertools.product of ``axes``)
+    per direction, or one where there is none; ``first`` the grid's first point (its
+    parameters not on an axis are the file's attributes); ``moving``: whether any point's
+    stop moves (else the stop face's metric is absent, not NaN)."""
+    shape = [len(v) for v in axes.values()]
+    parts = [_variables(values, axes, shape, moving) for values in solved]
+    if not directions:
+        ds = parts[0]
+    else:
+        ds = xr.concat(parts, dim=xr.DataArray(list(directions), dims="direction",
+                                               name="direction"))
+        ds["direction"].attrs = {"long_name": "direction of the frequency sweep",
+                                 "units": "1"}
+    return _attributes(ds, first, preset)
+
+
+def _variables(values: dict, axes, shape, moving) -> xr.Dataset:
+    """One direction's outputs on the grid, with the axes and modes as coordinates."""
     coords = {name: (name, np.asarray(v), {"units": _unit(name),
                                            "long_name": BEAM_PARAMETERS[name].description})
               for name, v in axes.items()}
     data = {}
-    for name, v in sol.values.items():
+    for name, v in values.items():
         o = OUTPUTS[name]
         if name == "modal_amplitude":
             data[name] = (list(axes) + ["mode"], v.reshape(shape + [v.shape[-1]]), o.attrs)
@@ -415,7 +430,7 @@ def _dataset(sol: BeamSolution, points, axes, shape) -> xr.Dataset:
                                 {"units": "1", "long_name": "bending mode number"}))
     if "status" in ds:
         ds["status"].attrs.update(STATUS_FLAGS)
-    if not any(moving_stop(p) for p in points):  # a metric the model lacks: absent, not NaN
+    if not moving:  # a metric the model lacks: absent, not NaN
         ds = ds.drop_vars("stop_face_max")
     return ds
 
@@ -425,12 +440,11 @@ def _unit(name: str) -> str:
     return BEAM_PARAMETERS[name].unit
 
 
-def _attributes(ds: xr.Dataset, p: dict, preset, fixed) -> xr.Dataset:
+def _attributes(ds: xr.Dataset, p: dict, preset: str) -> xr.Dataset:
     ds.attrs.update({
         "Conventions": "CF-1.8", "title": "harvester_sweep steady states of the beam model",
         "source": f"harvester_sweep {__version__} modal engine", "model": "beam",
-        "preset": preset or DEFAULT_BEAM_PRESET,
-        "notes": "; ".join(BEAM_PRESET_NOTES.get(preset or DEFAULT_BEAM_PRESET, [])),
+        "preset": preset, "notes": "; ".join(BEAM_PRESET_NOTES.get(preset, [])),
     })
     for name, value in p.items():
         if name not in ds.coords and value is not None:

@@ -6,6 +6,10 @@ axes and one direction, each point starting from the previous point's final stat
 down line runs from its highest frequency); without continuation every point is a line
 of one, run from rest. Lines never interact, so a point's result does not depend on the
 chunking, the thread count or the machine that ran its chunk.
+
+A chunk of a beam sweep (``spec.model == "beam"``) is solved by the beam's own solver
+(:func:`beam_chunk`): its lines swept along frequency together, one step after another
+(``beam_runs._swept``), or its points each from its linear steady state.
 """
 
 from __future__ import annotations
@@ -19,8 +23,7 @@ from .results import solve
 
 def chunk_points(spec, chunk: int) -> int:
     """Number of points of chunk ``chunk`` of ``spec`` (a SweepSpec)."""
-    first = chunk * spec.lines_per_chunk
-    return (min(first + spec.lines_per_chunk, spec.n_lines) - first) * spec.line_length
+    return len(spec.chunk_lines(chunk)) * spec.line_length
 
 
 def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) -> dict:
@@ -44,14 +47,18 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
         frequency order; ``strobe``: float64 (lines, points per line, samples, 2) holding
         the samples of outputs.STROBES, x [m] and V [V]; ``error_estimate``: float64 (lines,
         points per line) [-]; each of outputs.RUN_OUTPUTS (lines, points per line, its own
-        dimensions); ``run_time``: solve time [s].
+        dimensions); ``run_time``: solve time [s]. A beam chunk's: see :func:`beam_chunk`.
     """
     import numba
 
     if threads is not None:
         numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    first = chunk * spec.lines_per_chunk
-    lines = range(first, min(first + spec.lines_per_chunk, spec.n_lines))
+    if spec.model == "beam":
+        length = spec.line_length if spec.continuation else 1
+        return beam_chunk(spec, chunk, None if on_points is None
+                          else lambda done, total, what: on_points(chunk_points(spec, chunk)
+                                                                   // length))
+    lines = spec.chunk_lines(chunk)
     n, length = len(lines), spec.line_length
     # Line-major, each line in the order it runs (a down line from its highest frequency):
     # point (i, k) continues from point (i, k - 1).
@@ -92,3 +99,42 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
             "error_estimate": arranged(results.errors),
             **run,
             "run_time": np.float64(results.run_time)}
+
+
+def beam_chunk(spec, chunk: int, progress=None) -> dict:
+    """Solve chunk ``chunk`` of a beam sweep ``spec``: each line swept along frequency in its
+    direction, every point starting from the previous one's orbit, or each point (a line of
+    one) from its linear steady state.
+
+    ``progress(done, total, what)``, if given, is told after each frequency step of the
+    chunk's lines (``total`` steps), or once for points. Returns ``values``: float64
+    (lines, points per line, len(beam_runs.SCALARS)) and ``modal_amplitude``: float64
+    (lines, points per line, the grid's most modes), NaN beyond a point's own modes, both
+    in ascending frequency order along a line.
+    """
+    import time
+
+    from .beam_runs import SCALARS, _swept, solve_beam
+
+    lines = spec.chunk_lines(chunk)
+    length = spec.line_length
+    points = [spec.point_parameters(spec.values_at(line * length + k))
+              for line in lines for k in range(length)]
+    begun = time.perf_counter()
+    if spec.continuation:
+        direction = spec.directions[lines[0] * len(spec.directions) // spec.n_lines]
+        solved = _swept(points, {"line": None, "frequency": spec.grid["frequency"]},
+                        [len(lines), length], direction, progress)
+    else:
+        solved = solve_beam(points)
+        if progress is not None:
+            progress(1, 1, f"{len(points)} points")
+    modes = spec.grid["n_modes"].max() if "n_modes" in spec.grid else spec.base["n_modes"]
+    amplitude = np.full((len(points), int(modes)), np.nan)
+    found = solved.values["modal_amplitude"]
+    amplitude[:, :found.shape[1]] = found
+    shape = (len(lines), length)
+    return {"values": np.stack([solved.values[name] for name in SCALARS], axis=-1)
+            .reshape(shape + (len(SCALARS),)),
+            "modal_amplitude": amplitude.reshape(shape + amplitude.shape[1:]),
+            "run_time": np.float64(time.perf_counter() - begun)}

@@ -81,12 +81,16 @@ def _parser() -> argparse.ArgumentParser:
 
     beam_sweep = sub.add_parser(
         "beam-sweep", help="steady states of the beam model over a grid, into netCDF",
-        description="Solve the beam model at every point of a grid (one --axis per swept "
-        "parameter) and write the CF dataset. With --direction, each line along frequency "
-        "is swept in that direction, every point starting from the previous one's orbit "
-        "(the stop's hysteresis).")
+        description="Solve the beam model at every point of a grid (a sweep file with "
+        "model = \"beam\", or one --axis per swept parameter) and write the CF dataset. "
+        "With directions (--direction), each line along frequency is swept in that "
+        "direction, every point starting from the previous one's orbit (the stop's "
+        "hysteresis). Finished chunks are kept in OUT.nc.partial/ for --resume.")
+    beam_sweep.add_argument("sweep_file", nargs="?", metavar="SWEEP.toml",
+                            help="a sweep file with model = \"beam\" (see "
+                            "examples/beam_frequency_response.toml); or give --axis")
     _beam_common(beam_sweep)
-    beam_sweep.add_argument("--axis", dest="axes", action="append", default=[], required=True,
+    beam_sweep.add_argument("--axis", dest="axes", action="append", default=[],
                             metavar="NAME=SPEC",
                             help="a grid axis: NAME=START:STOP:COUNT (evenly spaced, ends "
                             "included) or NAME=V1,V2,... (repeatable), e.g. "
@@ -97,6 +101,9 @@ def _parser() -> argparse.ArgumentParser:
                             "state)")
     beam_sweep.add_argument("--output", "--out", dest="output", required=True,
                             metavar="OUT.nc", help="netCDF file to write")
+    beam_sweep.add_argument("--resume", action="store_true",
+                            help="finish an interrupted run from the chunks in "
+                            "OUT.nc.partial/")
     beam_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
     beam_where = beam_sweep.add_mutually_exclusive_group()
     beam_where.add_argument("--workers", type=int, metavar="N",
@@ -756,16 +763,6 @@ def _beam_axis(text: str) -> tuple[str, np.ndarray]:
     return name, np.array(values)
 
 
-def _beam_overrides(args) -> dict:
-    """The --set overrides of a beam command, checked with its preset (bad input: one
-    line, exit 2, before anything runs)."""
-    from .beam_parameters import resolve_beam_parameters
-
-    overrides = dict(_beam_assignment(text) for text in args.assignments)
-    resolve_beam_parameters(args.preset, **overrides)
-    return overrides
-
-
 def _announce_beam_compilation() -> None:
     """Say so where the beam's modal engine (cached apart from the tip-mass model's) is
     not in numba's on-disk cache: its first run compiles it."""
@@ -950,13 +947,55 @@ def _beam_branch_or_basins(args) -> int:
 
 
 def _beam_sweep(args) -> int:
-    from .beam_cluster import check_cluster, run_beam_sweep
-    from .beam_parameters import DEFAULT_BEAM_PRESET
-    from .datasets import write_netcdf
+    from .beam_cluster import check_cluster, run_beam_file
     from .outputs import STATUSES
+    from .sweep_file import load_sweep
 
     _check_output(args.output, (".nc",))
-    overrides = _beam_overrides(args)
+    # (checked once, before anything else: bad input is one line, exit 2)
+    spec = load_sweep(_beam_sweep_source(args), model="beam")
+    check_cluster(args.workers, args.scheduler)
+    _announce_beam_compilation()
+    start = time.perf_counter()
+    try:
+        ds = run_beam_file(spec, args.output, resume=args.resume,
+                           progress=_beam_progress(args.quiet), workers=args.workers,
+                           scheduler=args.scheduler, announce=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"harvester-sweep: interrupted; the finished chunks are kept in "
+              f"{args.output}.partial/: run the same command with --resume to finish",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    seconds = time.perf_counter() - start
+    counts = {s.name: int((ds["status"] == s.code).sum()) for s in STATUSES}
+    for s in reversed(STATUSES[1:]):  # the worst first
+        if counts[s.name]:
+            print(f"harvester-sweep: warning: {counts[s.name]} of {ds['status'].size} points "
+                  f"{s.name} (status = {s.code}): {s.meaning}", file=sys.stderr)
+    if not args.quiet:
+        print(f"harvester-sweep: {ds['status'].size} points ({counts['settled']} settled) in "
+              f"{seconds:.3g} s: {args.output}", file=sys.stderr)
+    return 0
+
+
+def _beam_sweep_source(args):
+    """What beam-sweep runs: its sweep file, or the sweep file (a dict) of its --axis,
+    --direction, --preset and --set (each value checked against its range here)."""
+    from .beam_cluster import beam_source
+
+    given = [option for option, value in (("--axis", args.axes), ("--set", args.assignments),
+                                          ("--preset", args.preset),
+                                          ("--direction", args.direction)) if value]
+    if args.sweep_file is not None:
+        if given:
+            raise ParameterError(f"{given[0]}: the sweep file {args.sweep_file} gives the "
+                                 "grid, its parameters and directions; give them there or "
+                                 "on the command line, not both")
+        return args.sweep_file
+    if not args.axes:
+        raise ParameterError("beam-sweep: give a sweep file (SWEEP.toml, with model = "
+                             "\"beam\") or at least one --axis NAME=START:STOP:COUNT")
+    overrides = dict(_beam_assignment(text) for text in args.assignments)
     axes = {}
     for text in args.axes:
         name, values = _beam_axis(text)
@@ -970,35 +1009,13 @@ def _beam_sweep(args) -> int:
     if directions and "frequency" not in axes:
         raise ParameterError("--direction: a sweep up or down needs a frequency axis "
                              "(--axis frequency=START:STOP:COUNT)")
-    preset = args.preset or DEFAULT_BEAM_PRESET
-    # (every point checked before any is solved: bad input is one line, exit 2)
-    from .beam_runs import points_of
-
-    points_of(preset, overrides, axes)
-    check_cluster(args.workers, args.scheduler)
-    _announce_beam_compilation()
-    start = time.perf_counter()
-    ds = run_beam_sweep(axes, preset, directions=directions,
-                        progress=_beam_progress(args.quiet), workers=args.workers,
-                        scheduler=args.scheduler, **overrides)
-    seconds = time.perf_counter() - start
-    with _writing(args.output):
-        write_netcdf(ds, args.output)
-    counts = {s.name: int((ds["status"] == s.code).sum()) for s in STATUSES}
-    for s in reversed(STATUSES[1:]):  # the worst first
-        if counts[s.name]:
-            print(f"harvester-sweep: warning: {counts[s.name]} of {ds['status'].size} points "
-                  f"{s.name} (status = {s.code}): {s.meaning}", file=sys.stderr)
-    if not args.quiet:
-        print(f"harvester-sweep: {ds['status'].size} points ({counts['settled']} settled) in "
-              f"{seconds:.3g} s: {args.output}", file=sys.stderr)
-    return 0
+    return beam_source(axes, args.preset, directions, **overrides)
 
 
 def _beam_progress(quiet: bool):
-    """beam_sweep's progress hook: one line on stderr per frequency step of a swept sweep
-    (each step of every line at once), or one for an unswept grid, or one per chunk on
-    dask; None when quiet."""
+    """A beam sweep's progress hook: one line on stderr per frequency step of a chunk's
+    swept lines (each step of its every line at once), per chunk of points, or per chunk
+    on dask; None when quiet."""
     if quiet:
         return None
     begun = [time.perf_counter()]

@@ -2,6 +2,7 @@
 
 A sweep file::
 
+    model = "tip_mass"      # or "beam": the bimorph in modes (beam_cluster.run_beam_file)
     preset = "paper"
     [parameters]            # fixed values, SI units, any name of PARAMETERS
     gap = 1e-6
@@ -20,6 +21,10 @@ A sweep file::
 
 Everything is checked before any integration; a bad entry raises :class:`ParameterError`
 naming its key.
+
+A beam sweep (``model = "beam"``) has the same parts with the beam's presets and parameters
+(beam_parameters.BEAM_PARAMETERS); its ``[sweep]`` takes ``directions`` and ``chunk_size``
+only, since every beam point is solved with all its outputs and its error estimate.
 """
 
 from __future__ import annotations
@@ -66,8 +71,18 @@ DEFAULT_CHUNK_SIZE = 4096
 DEFAULT_CHUNK_LINES = 128
 DEFAULT_CHUNK_CAP = 2**17  # points: a chunk's arrays take about 2 kB a point with 32 samples
 
-_TOP_KEYS = ("preset", "parameters", "grid", "sweep")
+#: The models a sweep file may name (``model``; default the tip-mass model).
+MODELS = ("tip_mass", "beam")
+_TOP_KEYS = ("model", "preset", "parameters", "grid", "sweep")
 _SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size", "error_estimate")
+_BEAM_SWEEP_KEYS = ("directions", "chunk_size")
+#: A beam point takes 0.1 to 1 s where a tip-mass point takes about a millisecond
+#: (benchmarks/results/beam.md): a beam chunk is small, so that an interruption loses
+#: minutes of work, not hours. Under continuation it holds whole lines, at least
+#: DEFAULT_BEAM_CHUNK_LINES of them: a chunk's lines are solved together at each
+#: frequency step, and the modal engine's threads share that step's points.
+DEFAULT_BEAM_CHUNK_SIZE = 64
+DEFAULT_BEAM_CHUNK_LINES = 8
 ERROR_ESTIMATES = ("sample", "all", "none")
 ERROR_SAMPLE_POINTS = 64  # points given an error estimate by default
 _RANGE_KEYS = ("start", "stop", "num", "scale")
@@ -115,6 +130,9 @@ class SweepSpec:
     base : dict
         The validated parameters of ``preset`` with ``fixed`` (SI units), resolved once:
         what the grid's points share.
+    model : str
+        ``"tip_mass"`` or ``"beam"`` (its parameters those of beam_parameters, its metrics
+        every output of a beam point, always with the error estimate).
     """
 
     preset: str
@@ -127,6 +145,7 @@ class SweepSpec:
     chunk_size: int
     error_estimate: str = "all"
     base: dict = None
+    model: str = "tip_mass"
 
     @property
     def continuation(self) -> bool:
@@ -162,8 +181,27 @@ class SweepSpec:
         return max(1, self.chunk_size // self.line_length)
 
     @property
+    def _part_lines(self) -> int:
+        """Lines a chunk may draw from: all of them, but for the beam under continuation
+        those of one direction (a beam chunk's lines are solved together at each frequency
+        step, which a chunk across two directions would halve)."""
+        if self.model == "beam" and self.continuation:
+            return self.n_lines // len(self.directions)
+        return self.n_lines
+
+    @property
     def n_chunks(self) -> int:
-        return -(-self.n_lines // self.lines_per_chunk)
+        part = self._part_lines
+        return self.n_lines // part * -(-part // self.lines_per_chunk)
+
+    def chunk_lines(self, chunk: int) -> range:
+        """The lines of chunk ``chunk`` (0 <= chunk < n_chunks): lines_per_chunk of them in
+        line order, fewer at the end of the grid (or, for the beam, of a direction)."""
+        part = self._part_lines
+        per_part = -(-part // self.lines_per_chunk)
+        which, k = divmod(chunk, per_part)
+        first = which * part + k * self.lines_per_chunk
+        return range(first, min(first + self.lines_per_chunk, (which + 1) * part))
 
     def estimated(self, flat_index: np.ndarray) -> np.ndarray:
         """Which points (by index line * line_length + position along the line) get an
@@ -188,6 +226,10 @@ class SweepSpec:
 
     def point_parameters(self, values: dict) -> dict:
         """Validated parameters of one point from its grid ``values`` (SI units)."""
+        if self.model == "beam":
+            from .beam_parameters import resolve_beam_parameters
+
+            return resolve_beam_parameters(self.preset, **self.fixed, **values)
         return resolve_parameters(self.preset, **self.fixed, **values)
 
     def canonical(self) -> str:
@@ -197,9 +239,10 @@ class SweepSpec:
         return json.dumps(
             {
                 "version": __version__,
+                "model": self.model,
                 # Chunks made by another engine would not match: a development install
                 # changes the engine without changing the version.
-                "kernel_sha256": SOURCE_DIGEST,
+                "kernel_sha256": SOURCE_DIGEST if self.model == "tip_mass" else _beam_digest(),
                 "preset": self.preset,
                 "parameters": self.base,
                 "grid": {name: _identity(values) for name, values in self.grid.items()},
@@ -217,6 +260,20 @@ class SweepSpec:
         return hashlib.sha256(self.canonical().encode()).hexdigest()
 
 
+def _beam_digest() -> str:
+    """SHA-256 of the source a beam point's numbers come from: the modal engine's, and the
+    Python that chooses its steps, solves its orbit (Newton on the period map, the step
+    halvings) and measures it, which for the beam is most of the method."""
+    from ._engine import cache
+    from ._engine.modal import SOURCE_DIGEST as MODAL_DIGEST
+
+    here = Path(__file__).parent
+    python = cache.source_digest(tuple(here / name for name in (
+        "beam_runs.py", "beam_packing.py", "modal_map.py", "bimorph.py", "rod.py",
+        "materials.py", "contact.py", "beam_parameters.py", "models/beam.py")))
+    return hashlib.sha256(f"{MODAL_DIGEST} {python}".encode()).hexdigest()
+
+
 def _identity(values: np.ndarray):
     """An axis as it enters the sweep's identity: its values, or for a long one their
     count, dtype and SHA-256."""
@@ -227,8 +284,10 @@ def _identity(values: np.ndarray):
             "sha256": hashlib.sha256(data.tobytes()).hexdigest()}
 
 
-def load_sweep(source) -> SweepSpec:
-    """A checked :class:`SweepSpec` from a TOML file path or a dict of the same shape.
+def load_sweep(source, model: str = "tip_mass") -> SweepSpec:
+    """A checked :class:`SweepSpec` from a TOML file path or a dict of the same shape, of
+    ``model``, the model the caller runs ("tip_mass" or "beam"): a sweep of the other one
+    is refused, saying which command runs it.
 
     Raises
     ------
@@ -239,24 +298,55 @@ def load_sweep(source) -> SweepSpec:
         names the key. No other exception comes from the file's content.
     """
     if isinstance(source, SweepSpec):
+        _check_model(source.model, model)
         return source
     source = read_toml(source, "sweep", _TOP_KEYS)
-    preset = source.get("preset", DEFAULT_PRESET)
+    _check_model(source.get("model", "tip_mass"), model)
+    beam = model == "beam"
+    if beam:
+        from .beam_parameters import BEAM_PARAMETERS as registry
+        from .beam_parameters import DEFAULT_BEAM_PRESET as default_preset
+        from .beam_parameters import resolve_beam_parameters as resolve
+    else:
+        registry, default_preset, resolve = PARAMETERS, DEFAULT_PRESET, resolve_parameters
+    preset = source.get("preset", default_preset)
     fixed = dict(table(source, "parameters"))
-    check_names(fixed)  # (before the call: `preset` among them would be a TypeError)
-    base = resolve_parameters(preset, **fixed)  # bad values, named
+    # (names checked before the call: `preset` among them would be a TypeError)
+    for name in fixed if beam else ():
+        if name not in registry:
+            raise ParameterError(f"unknown beam parameter {value_text(name)}: known "
+                                 f"parameters are {', '.join(registry)}")
+    check_names(() if beam else fixed)
+    base = resolve(preset, **fixed)  # bad values, named
     grid, spacing = {}, {}
     check_grid_size(table(source, "grid"))
     for name, entry in table(source, "grid").items():
-        grid[name], spacing[name] = axis(name, entry, fixed)
+        grid[name], spacing[name] = axis(name, entry, fixed, registry)
     if not grid:
         raise ParameterError("grid: give at least one parameter to sweep, e.g. "
                              "frequency = { start = 100, stop = 300, num = 201 }")
     options = table(source, "sweep")
-    unknown_keys(options, _SWEEP_KEYS, "sweep.")
+    if beam:
+        for key in options:
+            if key in _SWEEP_KEYS and key not in _BEAM_SWEEP_KEYS:
+                raise ParameterError(
+                    f"sweep.{key}: not for the beam model, which stores every output of "
+                    "every point with its error estimate; its keys are "
+                    + ", ".join(_BEAM_SWEEP_KEYS))
+    unknown_keys(options, _BEAM_SWEEP_KEYS if beam else _SWEEP_KEYS, "sweep.")
     directions = _directions(options, grid)
     if directions:
         grid["frequency"] = np.sort(grid["frequency"])  # "up" means increasing frequency
+    line_length = len(grid["frequency"]) if directions else 1
+    if beam:
+        from .beam_runs import SCALARS
+
+        chunk_size = _integer(options, "chunk_size", max(
+            DEFAULT_BEAM_CHUNK_SIZE, DEFAULT_BEAM_CHUNK_LINES * line_length))
+        spec = SweepSpec(preset, fixed, grid, spacing, directions,
+                         SCALARS + ("modal_amplitude",), 0, chunk_size, "all", base, "beam")
+        _check_corners(spec)
+        return spec
     outputs = _string_list(options, "outputs", OUTPUTS, list(METRIC_OUTPUTS))
     samples = 0
     if "strobe" in outputs:
@@ -268,7 +358,6 @@ def load_sweep(source) -> SweepSpec:
     if error_estimate not in ERROR_ESTIMATES:
         raise ParameterError(f"sweep.error_estimate = {value_text(error_estimate)}: must be one of "
                              + ", ".join(f'"{e}"' for e in ERROR_ESTIMATES))
-    line_length = len(grid["frequency"]) if directions else 1
     chunk_size = _integer(options, "chunk_size", max(
         DEFAULT_CHUNK_SIZE, min(DEFAULT_CHUNK_LINES * line_length, DEFAULT_CHUNK_CAP)))
     spec = SweepSpec(preset, fixed, grid, spacing, directions, metrics + ALWAYS_STORED, samples,
@@ -280,6 +369,20 @@ def load_sweep(source) -> SweepSpec:
             raise ParameterError(f"sweep.samples = {samples}: more than max_periods = {budget:g}, "
                                  "the most forcing periods a point runs")
     return spec
+
+
+def _check_model(named, model: str) -> None:
+    """Refuse a sweep whose ``model`` is unknown or not ``model``, the one the caller runs
+    (one line saying which command runs it)."""
+    if named not in MODELS:
+        raise ParameterError(f"model = {value_text(named)}: must be one of "
+                             + ", ".join(f'"{m}"' for m in MODELS))
+    if named != model:
+        command = ("harvester-sweep beam-sweep SWEEP.toml (beam_cluster.run_beam_file in "
+                   "Python)" if named == "beam" else "harvester-sweep run SWEEP.toml "
+                   "(run_sweep in Python)")
+        raise ParameterError(f"model = \"{named}\": a sweep of the {named.replace('_', '-')} "
+                             f"model; run it with {command}")
 
 
 def read_toml(source, what: str, keys) -> dict:
@@ -346,13 +449,14 @@ def check_grid_size(grid: dict, per_point: int = 1, what: str = "points") -> Non
             "grid coarser")
 
 
-def axis(name: str, entry, fixed: dict) -> tuple[np.ndarray, str]:
-    """Values [SI] and spacing of one grid axis, each value checked against its range."""
+def axis(name: str, entry, fixed: dict, registry=PARAMETERS) -> tuple[np.ndarray, str]:
+    """Values [SI] and spacing of one grid axis of a parameter of ``registry`` (the
+    model's), each value checked against its range."""
     key = f"grid.{_key(name)}"
-    if name not in PARAMETERS:
+    if name not in registry:
         raise ParameterError(f"{key}: unknown parameter; known parameters are "
-                             + ", ".join(PARAMETERS))
-    parameter = PARAMETERS[name]
+                             + ", ".join(registry))
+    parameter = registry[name]
     if parameter.kind not in ("float", "int"):
         raise ParameterError(f"{key}: only numeric parameters can be swept ({name} is "
                              f"{parameter.range_text()}); set it in [parameters]")
