@@ -267,7 +267,7 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
     base, axes, spacing = spec.base, spec.axes, spec.spacing
     import numba
 
-    announce(estimate_basins(spec, numba.get_num_threads()), yes, progress,
+    announce(estimate_basins(spec, numba.get_num_threads(), CALL_STARTS), yes, progress,
              "make the grid coarser or the samples fewer")
     for i in range(spec.n_points):  # (bad input fails before any integration)
         check_runnable(spec.point(i))

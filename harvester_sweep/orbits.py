@@ -155,6 +155,10 @@ class Orbits:
     rk4_steps : numpy.ndarray
         int64 (n,): RK4 steps taken for the point: trajectory, Newton with its perturbed
         copies, error estimate and re-solves.
+    rounds : numpy.ndarray
+        int64 (n,): the round (engine call, counted from 1) in which the point was done,
+        0 for a point not run: how long a solve took in calls, each of which costs the
+        solver's Python besides its steps (what run_estimate counts).
     """
 
     metrics: np.ndarray
@@ -164,6 +168,7 @@ class Orbits:
     errors: np.ndarray
     steps: np.ndarray
     rk4_steps: np.ndarray
+    rounds: np.ndarray
 
 
 def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
@@ -202,6 +207,8 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     while not (pts.phase == _DONE).all():
         assert ((pts.phase != _WAITING) & (pts.phase != _DONE)).any(), "no point to run"
         done = pts.round()
+        pts.calls += 1
+        pts.rounds[(pts.phase == _DONE) & (pts.rounds == 0)] = pts.calls
         if on_points is not None and done:
             on_points(done)
     return pts.result(samples)
@@ -222,6 +229,8 @@ class _Points:
         self.traj = states.copy()  # the trajectory's state
         self.run = np.zeros(n)  # trajectory periods run
         self.work = np.zeros(n)  # RK4 steps taken
+        self.calls = 0  # rounds run
+        self.rounds = np.zeros(n, dtype=np.int64)  # the round each point was done in
         self.steps = rows[:, PARAM.steps].copy()
         self.p = np.ones(n, dtype=np.int64)  # orbit period tried
         self.y = states.copy()  # Newton iterate (or the orbit under estimate)
@@ -817,7 +826,8 @@ class _Points:
                                    [..., None].repeat(self.D, axis=2), axis=1)
         strobes[valid] = taken[valid]
         return Orbits(metrics, strobes, self.finals, multipliers, self.errors,
-                      self.orbit_steps.astype(np.int64), self.work.astype(np.int64))
+                      self.orbit_steps.astype(np.int64), self.work.astype(np.int64),
+                      self.rounds.copy())
 
 
 def _orbit_period(strobes, scale):

@@ -1,49 +1,121 @@
-"""How much work a sweep is, said before it starts: points, RK4 steps and a rough run time.
+"""How long a run will take, said before it starts: the package's one run-time model.
 
-The steps come from the model, not from a trial run: each of a sample of points spread over
-the grid takes the step of its parameters (``steps_per_period``, chosen from its time scales
-when unset) for the periodic-orbit solver's runs (:data:`FREE_PERIODS` where the linear
-response from rest provably stays clear of the stop, twice its amplitude below the gap;
-else :data:`CONTACT_PERIODS`) and, with contact, for the periods the slowest transient
-needs to come within ``acceptance.NEAR`` of the orbit (at most ``max_periods``). Contact only
-adds damping, and a point continued from its neighbour starts closer to its orbit, so this
-is rather an upper estimate. The run time divides by a typical rate of the lane engine
-(:data:`harvester_sweep.timescales.STEPS_PER_SECOND`, the package's one run-time rate); the
-progress bar's ETA, from the measured rate, takes over once the sweep runs.
+A run's time is mostly not its RK4 steps: the periodic-orbit solver calls the engine once a
+round, and each round costs its Python and the call besides the steps. A swept line runs
+its points one after another (each starts from the last one's orbit), so a frequency
+response of two lines is hundreds of rounds of a few points each, where the steps alone
+take a tenth of the time (issue 44: "roughly 0.06 s" was said before 0.8-4 s). So the
+model counts three things, each measured on this machine, on the grid's own points, just
+before the run:
+
+- **a sample of the grid solved for real** (:data:`SAMPLE_POINTS` points spread over it;
+  under continuation :data:`SEGMENT` consecutive points of a line each, so that the points
+  that start from their neighbour's orbit are counted as the run takes them): each point's
+  RK4 steps and the rounds it ran in. A sample point gets at most :data:`SAMPLE_STEPS`
+  steps of motion; one that does not settle within them is counted as running its whole
+  budget (``max_periods``), as it will if it never settles;
+- **the engine's rate**: the sample's orbits run again in one engine call, its lanes
+  filled, timed (the best of :data:`RATE_RUNS`) [RK4 steps per second and thread];
+- **the cost of a round**: the sample's wall time less its steps at that rate, shared out
+  over its rounds and its points' rounds (a point in a round costs
+  :data:`POINT_ROUND_SHARE` of a round's own cost).
+
+A run of chunks (lines_per_chunk lines each, one after another) then takes, per chunk,
+its rounds (the slowest point's from rest; a line's, its points' one after another) at a
+round's cost, plus each point's rounds at their share and its steps at the engine's rate
+on the threads its calls take. On the examples and the benchmark grids this holds within a
+factor 3 of the measured time (benchmarks/estimate.py, benchmarks/results/estimate_44.md).
+The sample costs some rounds of its own (tens of milliseconds; a sweep's sample is measured
+once per process) and changes no result: the run solves every point afresh. The progress
+bar's ETA, from the run's own rate, takes over once the sweep runs.
 """
 
 from __future__ import annotations
 
 import math
 import sys
+import time
 import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from . import timescales
-from .acceptance import NEAR
-from .linear import linear_response
+from . import period_map
+from ._engine import LANES, METRIC, PARAM
+from .orbits import solve_orbits
+from .packing import pack_points
 from .parameters import ParameterError
-from .period_map import D
 
-#: A sweep estimated to take longer than this [s] starts only when confirmed (``--yes``).
+#: A run estimated to take longer than this [s] starts only when confirmed (``--yes``).
 LONG_RUN_SECONDS = 3600.0
-#: Periods of a point's own step the solver runs besides the motion, in Newton's iterates
-#: with their copies (D + 1 lanes), chord steps (one lane) and the error estimate (two runs
-#: at twice the steps): an orbit clear of the stop takes the motion's one period (a chord
-#: step with the contact-free map's monodromy) and a second chord step; one with contact
-#: the attempt from rest and about three iterates after its motion, the last with its
-#: copies both ways (2 D + 1 lanes: the monodromy by central differences).
-FREE_PERIODS = 1 + 1 + 2 * 2
-CONTACT_PERIODS = (D + 1) + 2 * (D + 1) + (2 * D + 1) + 2 * 2
-#: Points whose parameters are resolved for the estimate, spread evenly over the grid.
-SAMPLE_POINTS = 64
+#: Points of the grid solved for the estimate, spread evenly over it [-].
+SAMPLE_POINTS = 32
+#: Under continuation, the sample's points come in runs of this many consecutive points of
+#: a line, the first from rest [-].
+SEGMENT = 8
+#: RK4 steps of motion a sample point may run before it is counted as running its whole
+#: budget: bounds the sample's cost (a point that settles within it costs what it did) [-].
+SAMPLE_STEPS = 1_000_000
+#: The cost of one point in a round, as a share of the round's own cost (its Python and the
+#: engine call): measured 16 us against 1.6 ms on the benchmark grid and the frequency
+#: response example (2-core Xeon, shared) [-].
+POINT_ROUND_SHARE = 0.01
+#: Timed runs of the engine's rate, the best taken [-].
+RATE_RUNS = 3
+#: RK4 steps of one timed run of the engine's rate (tens of milliseconds) [-].
+RATE_STEPS = 1_000_000
+#: Steps below which an engine call runs on one thread (_engine's scheduler.SHORT_CALL) [-].
+SHORT_CALL = 200_000
+
+
+@dataclass(frozen=True)
+class Sample:
+    """What the solver did on a sample of a grid's points, and this machine's costs.
+
+    Attributes
+    ----------
+    head_steps, head_rounds : float
+        RK4 steps and rounds of a point solved from rest (the mean over the sample).
+    head_max_rounds : float
+        The most rounds of a point from rest: a chunk of points from rest runs until its
+        slowest is done.
+    line_steps, line_rounds : float
+        The same of a point that starts from its neighbour's orbit (NaN without
+        continuation).
+    line_max_rounds : float
+        The most rounds of such a point over the sample's runs of a line (the mean along
+        each): a chunk of lines runs until its slowest is done.
+    steps_per_second : float
+        The engine's rate on one thread, its lanes filled [RK4 steps/s].
+    round_seconds : float
+        The cost of a round besides its steps [s].
+    setup_seconds : float
+        The cost of a point before it is solved: its parameters resolved and packed [s].
+    seconds : float
+        What the sample and the rate's runs took [s].
+    """
+
+    head_steps: float
+    head_rounds: float
+    head_max_rounds: float
+    line_steps: float
+    line_rounds: float
+    line_max_rounds: float
+    steps_per_second: float
+    round_seconds: float
+    setup_seconds: float
+    seconds: float
+
+    def point_seconds(self, steps: float, rounds: float, threads: int) -> float:
+        """The time [s] a point of ``steps`` RK4 steps in ``rounds`` rounds adds to its
+        round, its steps on ``threads`` threads."""
+        return (self.setup_seconds + rounds * POINT_ROUND_SHARE * self.round_seconds
+                + steps / (self.steps_per_second * threads))
 
 
 @dataclass(frozen=True)
 class RunEstimate:
-    """The work of a sweep.
+    """The work of a run, and its time.
 
     Attributes
     ----------
@@ -55,6 +127,8 @@ class RunEstimate:
         RK4 steps the remaining points are expected to take.
     threads : int
         Threads that share the work.
+    seconds : float
+        Expected wall time [s].
     starts : int
         Runs from a start of their own at each point (a basin map's samples), 1 for a sweep.
     """
@@ -63,12 +137,8 @@ class RunEstimate:
     remaining: int
     steps: float
     threads: int
+    seconds: float
     starts: int = 1
-
-    @property
-    def seconds(self) -> float:
-        """Expected wall time [s] on ``threads`` threads."""
-        return self.steps / (timescales.STEPS_PER_SECOND * self.threads)
 
     @property
     def long(self) -> bool:
@@ -86,29 +156,202 @@ class RunEstimate:
 
 
 def estimate(spec, remaining: int, threads: int) -> RunEstimate:
-    """The expected work of ``remaining`` points of ``spec`` (a SweepSpec) on ``threads``."""
-    per_point = _mean_steps(spec.n_points,
-                            lambda i: spec.point_parameters(spec.values_at(i)))
-    return RunEstimate(spec.n_points, remaining, per_point * remaining, max(1, threads))
+    """The expected work and time of ``remaining`` points of ``spec`` (a SweepSpec) on
+    ``threads`` threads (its chunks one after another; more threads than this process's
+    numba threads: chunks side by side on Dask workers)."""
+    threads = max(1, threads)
+    if remaining <= 0:
+        return RunEstimate(spec.n_points, 0, 0.0, threads, 0.0)
+    sample = _sweep_sample(spec)
+    length = spec.line_length
+    lines = remaining / length
+    per_chunk = min(spec.lines_per_chunk, math.ceil(lines))
+    if spec.continuation:
+        line_steps = sample.head_steps + (length - 1) * sample.line_steps
+        line_rounds = sample.head_rounds + (length - 1) * sample.line_rounds
+        chunk_rounds = sample.head_max_rounds + (length - 1) * (
+            sample.line_max_rounds if per_chunk > 1 else sample.line_rounds)
+    else:
+        line_steps, line_rounds = sample.head_steps, sample.head_rounds
+        chunk_rounds = sample.head_max_rounds
+    return _timed(spec.n_points, remaining, lines, per_chunk, line_steps, line_rounds,
+                  chunk_rounds, sample, threads)
 
 
-def estimate_basins(spec, threads: int) -> RunEstimate:
-    """The expected work of a basin map ``spec`` (a basins.BasinSpec) on ``threads``: every
-    start run like a point from rest, and under a shock each point's run from rest too."""
+def estimate_basins(spec, threads: int, starts_per_call: int) -> RunEstimate:
+    """The expected work and time of a basin map ``spec`` (a basins.BasinSpec) on
+    ``threads``, its starts solved ``starts_per_call`` at a time: every start counted as a
+    point from rest (a start near an orbit settles sooner), and under a shock each point's
+    run from rest too."""
+    threads = max(1, threads)
+    sample = _basin_sample(spec)
     runs = spec.samples + (1 if spec.shock is not None else 0)
-    per_point = _mean_steps(spec.n_points, spec.point) * runs
-    return RunEstimate(spec.n_points, spec.n_points, per_point * spec.n_points,
-                       max(1, threads), spec.samples)
+    starts = spec.n_points * runs
+    per_call = max(1, starts_per_call // spec.samples) * runs
+    work = _timed(spec.n_points, spec.n_points, starts, min(per_call, starts),
+                  sample.head_steps, sample.head_rounds, sample.head_max_rounds, sample,
+                  threads)
+    return RunEstimate(spec.n_points, spec.n_points, work.steps, threads, work.seconds,
+                       spec.samples)
 
 
-def _mean_steps(n_points: int, point) -> float:
-    """The mean of point_steps over SAMPLE_POINTS points spread evenly over ``n_points``,
-    ``point(i)`` giving the validated parameters of point ``i``."""
-    picks = np.unique(np.linspace(0, n_points - 1, min(SAMPLE_POINTS, n_points))
-                      .round().astype(np.int64))
+def _timed(points, remaining, lines, per_chunk, line_steps, line_rounds, chunk_rounds,
+           sample, threads) -> RunEstimate:
+    """The time of ``lines`` lines (each ``line_steps`` steps in ``line_rounds`` point
+    rounds) run ``per_chunk`` lines at a time, a chunk's rounds ``chunk_rounds``."""
+    import numba
+
+    local = max(1, min(threads, numba.get_num_threads()))
+    side_by_side = max(1, threads // local)  # chunks at once (Dask workers)
+    chunks = math.ceil(lines / per_chunk)
+    # A call's steps: its lines' share of a round; short calls take one thread.
+    call_steps = per_chunk * line_steps / max(line_rounds, 1.0)
+    call_threads = 1 if call_steps < SHORT_CALL else min(local, math.ceil(per_chunk / LANES))
+    seconds = (chunks * chunk_rounds * sample.round_seconds
+               + lines * sample.point_seconds(line_steps, line_rounds, call_threads))
+    return RunEstimate(points, remaining, lines * line_steps, threads,
+                       seconds / min(side_by_side, chunks))
+
+
+def _sweep_sample(spec) -> Sample:
+    """The Sample of a sweep (SweepSpec), measured once per process and sweep."""
+    digest = spec.digest()
+    if digest not in _SAMPLES:
+        if len(_SAMPLES) >= 8:
+            _SAMPLES.pop(next(iter(_SAMPLES)))
+        _SAMPLES[digest] = _sample_of(spec)
+    return _SAMPLES[digest]
+
+
+_SAMPLES: dict = {}  # a sweep's digest -> its Sample, measured in this process
+
+
+def _sample_of(spec) -> Sample:
+    length = spec.line_length
+    if not spec.continuation:
+        index = _spread(spec.n_points, SAMPLE_POINTS)
+        successors = np.full(len(index), -1)
+    else:
+        segment = min(SEGMENT, length)
+        lines = _spread(spec.n_lines, max(1, SAMPLE_POINTS // segment))
+        firsts = _spread(length - segment + 1, len(lines))
+        index, successors = [], []
+        for k, (line, first) in enumerate(zip(lines, np.resize(firsts, len(lines)))):
+            position = np.arange(first, first + segment)
+            if spec.directions[np.unravel_index(line, spec.line_shape)[0]] == "down":
+                position = length - 1 - position  # (a down line runs from its top)
+            index.extend(line * length + position)
+            successors.extend([k * segment + j + 1 for j in range(segment - 1)] + [-1])
+        index, successors = np.asarray(index), np.asarray(successors)
+    points, setup = _resolved(lambda i: spec.point_parameters(spec.values_at(i)), index,
+                              spec.n_points)
+    return _measure(points, successors, spec.estimated(index), setup)
+
+
+def _basin_sample(spec) -> Sample:
+    """The Sample of a basin map (basins.BasinSpec): its points from rest."""
+    index = _spread(spec.n_points, SAMPLE_POINTS)
+    points, setup = _resolved(spec.point, index, spec.n_points)
+    return _measure(points, np.full(len(index), -1), np.zeros(len(index), dtype=bool),
+                    setup)
+
+
+def _spread(n: int, count: int) -> np.ndarray:
+    """Up to ``count`` indices spread evenly over 0 .. n - 1."""
+    return np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(np.int64))
+
+
+def _resolved(point, index, n: int) -> tuple[list, float]:
+    """The validated parameters ``point(i)`` of the points ``index`` of a grid of ``n``,
+    and the time [s] a point takes to be resolved and packed: timed on their neighbours,
+    as the first points resolved in a process pay for its first calls."""
     with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
         warnings.simplefilter("ignore")
-        return float(np.mean([point_steps(point(int(i))) for i in picks]))
+        points = [point(int(i)) for i in index]
+        began = time.perf_counter()
+        pack_points([point(int(i)) for i in (index + 1) % n])
+    return points, (time.perf_counter() - began) / len(index)
+
+
+def _measure(points, successors, estimated, setup: float) -> Sample:
+    """Solve ``points`` (validated parameter dicts; ``successors`` as the engine's, each
+    line's first from rest) for real, and time the engine on their orbits; ``setup``: a
+    point's time to be resolved and packed [s]."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        packed = pack_points(points)
+    rows = packed.rows.copy()
+    budget = rows[:, PARAM.max_periods].copy()
+    rows[:, PARAM.max_periods] = np.minimum(
+        budget, np.maximum(np.floor(SAMPLE_STEPS / rows[:, PARAM.steps]), 1.0))
+    period_map.compile_engine()  # (compiled or loaded outside the timing)
+    began = time.perf_counter()
+    orbits = solve_orbits(rows, packed.states, successors, estimated & ~packed.refused,
+                          packed.accuracy, packed.max_steps)
+    solving = time.perf_counter() - began
+    steps = orbits.rk4_steps.astype(float)
+    done = orbits.rounds.astype(float)  # the round each point was done in
+    heads = np.ones(len(points), dtype=bool)
+    heads[successors[successors >= 0]] = False
+    # A continued point's rounds: from its predecessor's end to its own (a successor
+    # starts once its predecessor is on its orbit, so at least one).
+    before = np.zeros(len(points))
+    linked = successors >= 0
+    before[successors[linked]] = done[linked]
+    rounds = np.where(heads, done, np.maximum(done - before, 1.0))
+    # A point cut short by the sample's budget runs on to its own.
+    run = orbits.metrics[:, METRIC.periods_run]
+    short = (orbits.metrics[:, METRIC.status] != 0) & (run >= rows[:, PARAM.max_periods]) \
+        & (budget > rows[:, PARAM.max_periods])
+    more = np.where(short, budget / np.maximum(run, 1.0), 1.0)
+    rate, rating = _engine_rate(rows, orbits.finals, packed.refused)
+    import numba
+
+    threads = max(1, min(numba.get_num_threads(), math.ceil(len(points) / LANES)))
+    besides = solving - steps.sum() / (rate * threads)
+    share = done.max() + POINT_ROUND_SHARE * rounds.sum()
+    # (at least a third of the sample's time is its rounds': its steps at the best rate
+    # seen take no less)
+    round_seconds = max(besides, solving / 3) / max(share, 1.0)
+    steps, rounds = steps * more, rounds * more
+    runs = ~packed.refused
+
+    def mean(values, where):
+        where = where & runs
+        return float(values[where].mean()) if where.any() else math.nan
+
+    line = np.cumsum(heads) - 1  # each point's run of a line (the sample's points in order)
+    spans = [mean(rounds, ~heads & (line == k)) for k in range(line[-1] + 1)]
+    return Sample(mean(steps, heads), mean(rounds, heads),
+                  float(rounds[heads & runs].max()) if (heads & runs).any() else 0.0,
+                  mean(steps, ~heads), mean(rounds, ~heads), float(np.nanmax(spans + [np.nan])) if not heads.all() else math.nan,
+                  rate, round_seconds, setup, solving + rating + 2 * setup * len(points))
+
+
+def _engine_rate(rows, states, refused) -> tuple[float, float]:
+    """RK4 steps per second and thread of the engine on ``rows`` from ``states`` (copies
+    of the points enough to fill every thread's lanes), the best of RATE_RUNS timed calls;
+    and the seconds the calls took."""
+    import numba
+
+    keep = ~refused
+    if not keep.any():
+        return 1e8, 0.0
+    threads = numba.get_num_threads()
+    copies = math.ceil(2 * LANES * threads / keep.sum())
+    rows, states = np.repeat(rows[keep], copies, axis=0), np.repeat(states[keep], copies,
+                                                                       axis=0)
+    periods = max(1, round(RATE_STEPS / rows[:, PARAM.steps].sum()))
+    best, began = math.inf, time.perf_counter()
+    for _ in range(RATE_RUNS):
+        batch = period_map.Batch(period_map.state_size(rows), 1)
+        batch.add(rows, states, periods, book=True)
+        start = time.perf_counter()
+        (run,) = batch.run()
+        best = min(best, time.perf_counter() - start)
+    steps = float(run.work.sum())
+    used = min(threads, math.ceil(len(rows) / LANES))
+    return steps / (best * used), time.perf_counter() - began
 
 
 def announce(work: RunEstimate, yes: bool, progress: bool, smaller: str) -> None:
@@ -121,18 +364,6 @@ def announce(work: RunEstimate, yes: bool, progress: bool, smaller: str) -> None
             f"(yes=True in Python), or {smaller}")
     if progress:
         print(f"harvester-sweep: {work.describe()}", file=sys.stderr, flush=True)
-
-
-def point_steps(p: dict) -> float:
-    """RK4 steps point ``p`` (validated parameters) is expected to take from rest; 0 for a
-    point refused as too stiff."""
-    if p["steps_per_period"] > p["max_steps_per_period"]:
-        return 0.0
-    if not (p["hertz_stiffness"] > 0 and 2 * abs(linear_response(**p)[0]) >= p["gap"]):
-        return p["steps_per_period"] * FREE_PERIODS
-    rate, _ = timescales.slowest_decay(p)
-    motion = math.log(1.0 / NEAR) * p["frequency"] / rate if rate > 0 else math.inf
-    return p["steps_per_period"] * (min(p["max_periods"], motion) + CONTACT_PERIODS)
 
 
 def duration(seconds: float) -> str:

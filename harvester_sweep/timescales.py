@@ -32,13 +32,12 @@ RK4_STABILITY = 2.5
 #: Measured on the paper scene (benchmarks/convergence.py): relative error of the metrics
 #: ~ ERROR_CONSTANT (h w_fast)^4 with contact switches located.
 ERROR_CONSTANT = 2e-4
-#: RK4 steps a thread of the lane engine takes per second, its lanes filled by a sweep's
-#: points [steps/s]: the one rate every run-time estimate divides by (a sweep's before it
-#: starts, run_estimate; a refused point's in its message, run_time_estimate). Estimates
-#: only, never a decision about a result. The benchmark grids run at 1e8-2.5e8 a thread on
-#: AMD Zen 3 (benchmarks/results/), Zen 1's 128-bit vector units take about half that; at
-#: 1e8 the 1e6-point example is estimated at 4.2 min on two threads, and took 4.6 (AVX-512)
-#: and 8.0 min (AVX2) (docs/benchmarks.md).
+#: The lane engine's nominal rate, a thread's RK4 steps per second with its lanes filled
+#: [steps/s]: what a message about a point that is not run divides by (a refused point's
+#: time, run_time_estimate). A run's estimate does not assume it: run_estimate measures
+#: the rate and what the solver does besides its steps on the run's own points (the steps
+#: alone were 15 to 70 times off the examples' times, issue 44). The benchmark grids run
+#: at 1e8-2.5e8 a thread on AMD Zen 3 (benchmarks/results/).
 STEPS_PER_SECOND = 1e8
 #: Periods a run typically needs to settle, for run-time estimates in messages.
 TYPICAL_PERIODS = 150

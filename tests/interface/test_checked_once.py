@@ -1,6 +1,6 @@
 """Each analysis checks its input once: the command line hands the spec its reader checked
-to the analysis, which takes it as it is; each default is written in one place; one rate
-drives every run-time estimate."""
+to the analysis, which takes it as it is; each default is written in one place; a sweep's
+run-time estimate measures its rate, a refused point's says the one nominal rate."""
 
 from __future__ import annotations
 
@@ -179,17 +179,22 @@ def test_a_checked_spec_is_taken_whole_or_refused():
         run_scene(scene.check_scene(gap=2e-6), gap=3e-6)
 
 
-def test_one_rate_drives_every_run_time_estimate(monkeypatch):
-    """A sweep's estimate and a refused point's message scale alike with the one rate."""
+def test_a_sweep_measures_its_rate_and_a_refused_point_says_the_nominal_one(monkeypatch):
+    """A sweep's estimate runs on the rate it measures on this machine, never on the
+    nominal rate (issue 44: that one was 15 to 70 times off on the examples); a refused
+    point, which nothing runs, says its time at the nominal rate, the one place it is
+    written (timescales.STEPS_PER_SECOND)."""
     spec = sweep_file.load_sweep({"grid": {"frequency": [140.0, 150.0]}})
     stiff = resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
 
     def seconds():
         said = re.search(r"about (\d+) s per point", refusal(stiff))
-        return estimate(spec, spec.n_points, 1).seconds, float(said.group(1))
+        return estimate(spec, spec.n_points, 1), float(said.group(1))
 
     sweep_before, point_before = seconds()
     monkeypatch.setattr(timescales, "STEPS_PER_SECOND", timescales.STEPS_PER_SECOND / 1000)
     sweep_after, point_after = seconds()
-    assert sweep_after == pytest.approx(1000 * sweep_before)
+    # (the sweep's sample is measured once per process: the same numbers unless the
+    # nominal rate entered them)
+    assert sweep_after == sweep_before
     assert point_after == pytest.approx(1000 * point_before, rel=0.3)  # (said in whole s)

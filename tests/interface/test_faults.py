@@ -282,7 +282,8 @@ def test_the_estimate_counts_the_steps_the_sweep_takes(capsys):
                       {"steps_per_period": 512})
     work = estimate(load_sweep(sweep_dict), 12, threads=1)
     ds = run_sweep(sweep_dict, progress=False)
-    assert 1.0 < work.steps / float(ds["rk4_steps"].sum()) < 3.0
+    # (a grid no larger than the estimate's sample is solved whole by it: its own steps)
+    assert 1.0 <= work.steps / float(ds["rk4_steps"].sum()) < 3.0
 
 
 @pytest.mark.parametrize("argv, words", [
