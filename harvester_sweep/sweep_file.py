@@ -76,11 +76,12 @@ MODELS = ("tip_mass", "beam")
 _TOP_KEYS = ("model", "preset", "parameters", "grid", "sweep")
 _SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size", "error_estimate")
 _BEAM_SWEEP_KEYS = ("directions", "chunk_size")
-#: A beam point takes 0.1 to 1 s where a tip-mass point takes about a millisecond
-#: (benchmarks/results/beam.md): a beam chunk is small, so that an interruption loses
-#: minutes of work, not hours. Under continuation it holds whole lines, at least
-#: DEFAULT_BEAM_CHUNK_LINES of them: a chunk's lines are solved together at each
-#: frequency step, and the modal engine's threads share that step's points.
+#: A settled beam point takes 5 to 140 ms, one that runs its budget of periods a second
+#: or more (benchmarks/results/beam.md), where a tip-mass point takes under a millisecond:
+#: a beam chunk is small, so that an interruption loses minutes of work, not hours. Under
+#: continuation it holds whole lines, at least DEFAULT_BEAM_CHUNK_LINES of them: a
+#: chunk's lines are solved together at each frequency step, and the modal engine's
+#: threads share that step's points.
 DEFAULT_BEAM_CHUNK_SIZE = 64
 DEFAULT_BEAM_CHUNK_LINES = 8
 ERROR_ESTIMATES = ("sample", "all", "none")
