@@ -20,7 +20,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .beam_parameters import DEFAULT_BEAM_PRESET, moving_stop
-from .chunk_store import ChunkStore, MemoryStore, write_failure
+from .chunk_store import ChunkStore, MemoryStore, load_computed, write_failure
 from .chunks import beam_chunk, chunk_points
 from .cluster import check_scheduler
 from .parameters import ParameterError, is_number, value_text
@@ -123,8 +123,6 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
         (a ParameterError) When dask cannot finish the chunks (workers that keep dying,
         the scheduler lost, none left); every chunk that came back is kept for ``resume``.
     """
-    from .sweep import _load
-
     spec = load_sweep(sweep, model="beam")
     if output is not None and not str(output).lower().endswith(".nc"):
         raise ParameterError(f"output = {str(output)!r}: the file name must end in .nc (the "
@@ -152,7 +150,7 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
                             workers, scheduler)
 
         compute(todo)
-        results = [_load(store, chunk, compute) for chunk in range(spec.n_chunks)]
+        results = [load_computed(store, chunk, compute) for chunk in range(spec.n_chunks)]
         ds = beam_dataset(spec, results)
         if output is not None:
             from .datasets import write_netcdf

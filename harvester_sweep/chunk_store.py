@@ -233,6 +233,19 @@ class ChunkStore:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
+def load_computed(store, chunk: int, compute) -> dict:
+    """A finished chunk's arrays from ``store``; one damaged since the run began is
+    computed again (``compute([chunk])`` saves it), once."""
+    result = store.load(chunk)
+    if result is None:
+        compute([chunk])
+        result = store.load(chunk)
+        if result is None:
+            raise StoreError(f"chunk {chunk} fails its check right after it was written: "
+                             f"the disk under {store.dir} does not keep what is written to it")
+    return result
+
+
 def write_failure(path, error: OSError, size: int | None = None) -> str:
     """Why ``path`` could not be written, in words: the system's reason, or, where the
     library gives none (netCDF4 reports every refusal of HDF5, a full disk included, as

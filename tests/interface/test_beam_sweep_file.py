@@ -279,3 +279,17 @@ def test_a_sweep_file_given_to_the_wrong_command_exits_2_in_one_line(argv, words
     assert err.count("\n") == 1 and "Traceback" not in err, err
     for word in words:
         assert word in err, (word, err)
+
+
+def test_beam_sweep_reads_and_checks_its_file_once(tmp_path, monkeypatch):
+    from harvester_sweep import sweep_file
+
+    path = tmp_path / "s.toml"
+    path.write_text('model = "beam"\n[parameters]\nn_modes = 1\n[grid]\n'
+                    'frequency = [230.0, 240.0]\n')
+    reads, read = [], sweep_file.read_toml
+    monkeypatch.setattr(sweep_file, "read_toml",
+                        lambda *a, **k: reads.append(a) or read(*a, **k))
+    assert cli.main(["beam-sweep", str(path), "--output", str(tmp_path / "s.nc"),
+                     "--quiet"]) == 0
+    assert len(reads) == 1, reads
