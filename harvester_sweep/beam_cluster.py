@@ -20,7 +20,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .beam_parameters import DEFAULT_BEAM_PRESET, moving_stop
-from .chunk_store import ChunkStore, MemoryStore, load_computed, write_failure
+from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import beam_chunk, chunk_points
 from .cluster import check_scheduler
 from .parameters import ParameterError, is_number, value_text
@@ -153,14 +153,7 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
         results = [load_computed(store, chunk, compute) for chunk in range(spec.n_chunks)]
         ds = beam_dataset(spec, results)
         if output is not None:
-            from .datasets import write_netcdf
-
-            try:
-                write_netcdf(ds, output)
-            except OSError as error:
-                raise store.unwritten(output, write_failure(output, error, ds.nbytes)) \
-                    from None
-            store.remove()
+            write_result(store, ds, output)
     return ds
 
 

@@ -233,6 +233,19 @@ class ChunkStore:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
+def write_result(store, ds, output) -> None:
+    """Write a finished sweep's dataset ``ds`` to ``output``, then remove the partial
+    result of ``store``; a file that cannot be written keeps it for --resume
+    (StoreError)."""
+    from .datasets import write_netcdf
+
+    try:
+        write_netcdf(ds, output)
+    except OSError as error:
+        raise store.unwritten(output, write_failure(output, error, ds.nbytes)) from None
+    store.remove()
+
+
 def load_computed(store, chunk: int, compute) -> dict:
     """A finished chunk's arrays from ``store``; one damaged since the run began is
     computed again (``compute([chunk])`` saves it), once."""

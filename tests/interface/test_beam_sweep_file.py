@@ -110,6 +110,27 @@ def test_resume_after_an_interruption_gives_the_uninterrupted_file(whole, tmp_pa
         assert_same_bits(written, whole)
 
 
+def test_a_full_disk_while_writing_the_file_keeps_the_chunks(whole, tmp_path, monkeypatch):
+    import errno
+
+    from harvester_sweep import datasets
+
+    def full(ds, path):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    out = tmp_path / "full.nc"
+    monkeypatch.setattr(datasets, "write_netcdf", full)
+    with pytest.raises(chunk_store.StoreError, match="the 4 finished chunks are kept"):
+        run_beam_file(SWEPT, out)
+    monkeypatch.undo()
+    computed = []
+    solve = beam_cluster.beam_chunk
+    monkeypatch.setattr(beam_cluster, "beam_chunk",
+                        lambda spec, chunk, *a: computed.append(chunk) or solve(spec, chunk, *a))
+    assert_same_bits(run_beam_file(SWEPT, out, resume=True), whole)
+    assert computed == []  # nothing solved again
+
+
 def test_a_partial_result_is_resumed_by_the_same_sweep_only(tmp_path, monkeypatch):
     out = tmp_path / "part.nc"
     _stopped_after(1, out, monkeypatch)
