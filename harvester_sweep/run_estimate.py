@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import period_map
+from . import period_map, timescales
 from ._engine import LANES, METRIC, PARAM
 from .orbits import solve_orbits
 from .packing import pack_points
@@ -243,16 +243,16 @@ def _sample_of(spec) -> Sample:
             index.extend(line * length + position)
             successors.extend([k * segment + j + 1 for j in range(segment - 1)] + [-1])
         index, successors = np.asarray(index), np.asarray(successors)
-    points, setup = _resolved(lambda i: spec.point_parameters(spec.values_at(i)), index,
+    packed, setup = _resolved(lambda i: spec.point_parameters(spec.values_at(i)), index,
                               spec.n_points)
-    return _measure(points, successors, spec.estimated(index), setup)
+    return _measure(packed, successors, spec.estimated(index), setup)
 
 
 def _basin_sample(spec) -> Sample:
     """The Sample of a basin map (basins.BasinSpec): its points from rest."""
     index = _spread(spec.n_points, SAMPLE_POINTS)
-    points, setup = _resolved(spec.point, index, spec.n_points)
-    return _measure(points, np.full(len(index), -1), np.zeros(len(index), dtype=bool),
+    packed, setup = _resolved(spec.point, index, spec.n_points)
+    return _measure(packed, np.full(len(index), -1), np.zeros(len(index), dtype=bool),
                     setup)
 
 
@@ -261,25 +261,23 @@ def _spread(n: int, count: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(np.int64))
 
 
-def _resolved(point, index, n: int) -> tuple[list, float]:
-    """The validated parameters ``point(i)`` of the points ``index`` of a grid of ``n``,
-    and the time [s] a point takes to be resolved and packed: timed on their neighbours,
-    as the first points resolved in a process pay for its first calls."""
+def _resolved(point, index, n: int) -> tuple[object, float]:
+    """The points ``index`` of a grid of ``n`` (``point(i)``: validated parameters)
+    packed, and the time [s] a point takes to be resolved and packed: timed on their
+    neighbours, as the first points resolved and packed in a process pay for its first
+    calls."""
     with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
         warnings.simplefilter("ignore")
-        points = [point(int(i)) for i in index]
+        packed = pack_points([point(int(i)) for i in index])
         began = time.perf_counter()
         pack_points([point(int(i)) for i in (index + 1) % n])
-    return points, (time.perf_counter() - began) / len(index)
+    return packed, (time.perf_counter() - began) / len(index)
 
 
-def _measure(points, successors, estimated, setup: float) -> Sample:
-    """Solve ``points`` (validated parameter dicts; ``successors`` as the engine's, each
-    line's first from rest) for real, and time the engine on their orbits; ``setup``: a
-    point's time to be resolved and packed [s]."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        packed = pack_points(points)
+def _measure(packed, successors, estimated, setup: float) -> Sample:
+    """Solve ``packed`` points (``successors`` as the engine's, each line's first from
+    rest) for real, and time the engine on their orbits; ``setup``: a point's time to be
+    resolved and packed [s]."""
     rows = packed.rows.copy()
     budget = rows[:, PARAM.max_periods].copy()
     rows[:, PARAM.max_periods] = np.minimum(
@@ -291,11 +289,11 @@ def _measure(points, successors, estimated, setup: float) -> Sample:
     solving = time.perf_counter() - began
     steps = orbits.rk4_steps.astype(float)
     done = orbits.rounds.astype(float)  # the round each point was done in
-    heads = np.ones(len(points), dtype=bool)
+    heads = np.ones(len(packed), dtype=bool)
     heads[successors[successors >= 0]] = False
     # A continued point's rounds: from its predecessor's end to its own (a successor
     # starts once its predecessor is on its orbit, so at least one).
-    before = np.zeros(len(points))
+    before = np.zeros(len(packed))
     linked = successors >= 0
     before[successors[linked]] = done[linked]
     rounds = np.where(heads, done, np.maximum(done - before, 1.0))
@@ -307,7 +305,7 @@ def _measure(points, successors, estimated, setup: float) -> Sample:
     rate, rating = _engine_rate(rows, orbits.finals, packed.refused)
     import numba
 
-    threads = max(1, min(numba.get_num_threads(), math.ceil(len(points) / LANES)))
+    threads = max(1, min(numba.get_num_threads(), math.ceil(len(packed) / LANES)))
     besides = solving - steps.sum() / (rate * threads)
     share = done.max() + POINT_ROUND_SHARE * rounds.sum()
     # (at least a third of the sample's time is its rounds': its steps at the best rate
@@ -322,10 +320,11 @@ def _measure(points, successors, estimated, setup: float) -> Sample:
 
     line = np.cumsum(heads) - 1  # each point's run of a line (the sample's points in order)
     spans = [mean(rounds, ~heads & (line == k)) for k in range(line[-1] + 1)]
+    slowest = max((r for r in spans if not math.isnan(r)), default=math.nan)
     return Sample(mean(steps, heads), mean(rounds, heads),
                   float(rounds[heads & runs].max()) if (heads & runs).any() else 0.0,
-                  mean(steps, ~heads), mean(rounds, ~heads), float(np.nanmax(spans + [np.nan])) if not heads.all() else math.nan,
-                  rate, round_seconds, setup, solving + rating + 2 * setup * len(points))
+                  mean(steps, ~heads), mean(rounds, ~heads), slowest, rate, round_seconds,
+                  setup, solving + rating + 2 * setup * len(packed))
 
 
 def _engine_rate(rows, states, refused) -> tuple[float, float]:
@@ -335,8 +334,8 @@ def _engine_rate(rows, states, refused) -> tuple[float, float]:
     import numba
 
     keep = ~refused
-    if not keep.any():
-        return 1e8, 0.0
+    if not keep.any():  # (nothing runs: the nominal rate, never used on a step)
+        return timescales.STEPS_PER_SECOND, 0.0
     threads = numba.get_num_threads()
     copies = math.ceil(2 * LANES * threads / keep.sum())
     rows, states = np.repeat(rows[keep], copies, axis=0), np.repeat(states[keep], copies,
