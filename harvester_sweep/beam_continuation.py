@@ -3,12 +3,14 @@ the fixed points of the modal engine's period map in one parameter.
 
 The unknowns are the orbit's state at phase 0 (in units of each component's scale) and
 the parameter (in units of the branch's range); the map and its derivatives (the
-monodromy and the derivative in the parameter, by forward differences) come from the
-engine's own period map (``modal_map.map_states``), at the step that meets ``accuracy``
-at the branch's first point. Along the branch each bifurcation is located by
-bisection of the arclength step where its test function changes sign: folds (the
-tangent's parameter component), a period doubling (det(M + I)), Neimark-Sacker (a complex
-pair's modulus less one), grazing (the orbit's reach past a stop).
+monodromy and the derivative in the parameter, by finite differences) come from the
+engine's own period map (``modal_map``), at the step that meets ``accuracy`` at the
+branch's first point. Along the branch each bifurcation is located by bisection of the
+arclength step where its test function changes sign: folds (the tangent's parameter
+component), a period doubling (det(M + I)), Neimark-Sacker (a complex pair's modulus less
+one), grazing (the orbit's reach past a stop). Then every point is brought to the step
+that meets ``accuracy``, each bifurcation located again at twice its steps
+(:func:`_accurate`; docs/numerics.md, "Branches of the beam").
 """
 
 from __future__ import annotations
@@ -21,9 +23,18 @@ import xarray as xr
 from . import modal_map
 from .beam_packing import pack_beam
 from .beam_parameters import BEAM_PARAMETERS, DEFAULT_BEAM_PRESET, resolve_beam_parameters
-from .beam_runs import PERTURBATION, point_outputs, solve_beam, system_of
+from .beam_runs import (
+    MAX_LEVELS,
+    PERTURBATION,
+    point_outputs,
+    relative_change,
+    solve_beam,
+    system_of,
+)
+from .datasets import multiplier_coordinate
 from .outputs import BIFURCATION_FLAGS, BIFURCATIONS, OUTPUTS
 from .parameters import ParameterError
+from .period_map import sorted_multipliers
 from .version import __version__
 
 #: Corrector iterations at most, and the largest correction (in scaled units) a step's
@@ -32,17 +43,32 @@ CORRECTOR = 8
 MAX_CORRECTION = 0.3
 #: Converged where the scaled residual is below this [-].
 TOLERANCE = 1e-9
+#: Bisection locates a bifurcation to this width of scaled arclength [-] (so to this
+#: fraction of the branch's range in the parameter, or better): at a fold the parameter
+#: hardly changes along the branch but the orbit does, and its outputs are wanted to
+#: the accuracy target too.
+LOCATE = 1e-10
+#: A located bifurcation is located again at twice the steps in a bracket along its
+#: tangent this wide (scaled arclength), widened RELOCATE_GROWTH-fold up to
+#: RELOCATE_TRIES times until its test function changes sign in it [-].
+RELOCATE_WIDTH = 1e-5
+RELOCATE_GROWTH = 8.0
+RELOCATE_TRIES = 5
 #: The outputs each branch point reports.
 BRANCH_OUTPUTS = ("power", "v_peak", "x_max", "x_min", "root_strain_max",
                   "impacts_per_period", "contact_force_max")
 
 
 class _Map:
-    """The period map of a beam point as a function of the scaled state and parameter."""
+    """The period map of a beam point as a function of the scaled state and parameter;
+    its derivatives by forward differences, or by central ones (``central``: twice the
+    runs, the error of the derivatives about 1e-10 instead of 1e-6) where a bifurcation is
+    located: its test functions read them."""
 
-    def __init__(self, p: dict, parameter: str, span: float, steps: int, substep: float):
+    def __init__(self, p: dict, parameter: str, span: float, steps: int, substep: float,
+                 central: bool = False):
         self.p, self.parameter, self.span = p, parameter, span
-        self.steps, self.substep = steps, substep
+        self.steps, self.substep, self.central = steps, substep, central
         self.scale = system_of(p).scale
         self.D = len(self.scale)
 
@@ -54,22 +80,33 @@ class _Map:
         return [pack_beam(q, system_of(q), self.steps, self.substep)
                 for q in (self.point(v) for v in values)]
 
+    def finer(self) -> _Map:
+        """The same map at twice the grid steps and half the contact sub-step."""
+        return _Map(self.p, self.parameter, self.span, 2 * self.steps, self.substep / 2,
+                    self.central)
+
+    def precise(self) -> _Map:
+        """The same map with central differences."""
+        return _Map(self.p, self.parameter, self.span, self.steps, self.substep, True)
+
     def residual_and_jacobian(self, u):
         """F(u) = (P(y) - y) / scale and dF/du (D, D + 1) at u = (y / scale, lambda / span)."""
         D, scale = self.D, self.scale
         y, lam = u[:D] * scale, u[D] * self.span
         h = PERTURBATION
-        dlam = h * self.span
-        packs = self.packs([lam] * (D + 1) + [lam + dlam])
-        states = [y] + [y + h * scale[k] * np.eye(D)[k] for k in range(D)] + [y]
-        ends, ok = modal_map.map_states(packs, states, np.ones(D + 2, dtype=np.int64))
-        if not ok.all():
+        sides = (1.0, -1.0) if self.central else (1.0,)
+        here, *moved = self.packs([lam] + [lam + side * h * self.span for side in sides])
+        monodromy, image, ok = modal_map.monodromies([here], y[None], [1], (h * scale)[None],
+                                                     central=self.central)
+        shifted, ok_moved = modal_map.map_states(moved, np.repeat(y[None], len(moved), 0),
+                                                 np.ones(len(moved), dtype=np.int64))
+        if not (ok.all() and ok_moved.all()):
             raise FloatingPointError("the period map diverged")
-        base = (ends[0] - y) / scale
         jac = np.empty((D, D + 1))
-        jac[:, :D] = ((ends[1:D + 1] - ends[0]) / scale).T / h - np.eye(D)
-        jac[:, D] = (ends[D + 1] - ends[0]) / scale / h
-        return base, jac
+        jac[:, :D] = monodromy[0] * scale[None, :] / scale[:, None] - np.eye(D)
+        lower = shifted[1] if self.central else image[0]
+        jac[:, D] = (shifted[0] - lower) / scale / (h * len(sides))
+        return (image[0] - y) / scale, jac
 
     def outputs(self, u) -> dict:
         y, lam = u[:self.D] * self.scale, u[self.D] * self.span
@@ -152,13 +189,14 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
         found = []  # each bifurcation between the two points, located and marked there
         for test in _TESTS:
             if test(f, u0, points[-1][1], t0) * test(f, u1, jac1, t1) < 0:
-                where, located = _locate(f, u0, t0, ds_step, test)
+                where, located = _locate(f.precise(), u0, t0, ds_step, test)
                 if located is not None:
                     found.append((where, located + (_KINDS[test],)))
         points.extend(point for _, point in sorted(found, key=lambda item: item[0]))
         points.append((u1, jac1, t1, "none"))
         ds_step = min(ds_step * 1.5, 2 * step)
-    return _dataset(f, points, parameter, preset)
+    return _dataset(f, [_accurate(f, *point, p["accuracy"]) for point in points], parameter,
+                    preset)
 
 
 def _fold(f, u, jac, t) -> float:
@@ -198,9 +236,8 @@ _KINDS = {_fold: "fold", _doubling: "period_doubling", _torus: "neimark_sacker",
 
 def _locate(f: _Map, u0, t0, ds: float, test):
     """The point between u0 and u0 + ds along t0 where ``test`` changes sign, by
-    bisection of the arclength step (each trial corrected onto the branch), to 1e-9 of
-    the branch's range in the parameter: (its arclength from u0, the point), the point
-    None where a trial fails."""
+    bisection of the arclength step (each trial corrected onto the branch), to LOCATE:
+    (its arclength from u0, the point), the point None where a trial fails."""
     jac0 = f.residual_and_jacobian(u0)[1]
     sign0 = np.sign(test(f, u0, jac0, t0))
     lo, hi, best = 0.0, ds, None
@@ -217,7 +254,7 @@ def _locate(f: _Map, u0, t0, ds: float, test):
             lo = mid
         else:
             hi = mid
-        if (hi - lo) * abs(t0[-1]) <= 1e-9 and (hi - lo) <= 1e-7:
+        if hi - lo <= LOCATE:
             break
     return mid, best
 
@@ -247,30 +284,149 @@ def _correct(f: _Map, u, t, guess):
     return u, jac
 
 
-def _dataset(f: _Map, points, parameter: str, preset) -> xr.Dataset:
-    D = f.D
-    n = len(points)
-    values = np.array([u[D] * f.span for u, *_ in points])
-    mult = [np.linalg.eigvals(jac[:, :D] + np.eye(D)) for _, jac, *_ in points]
-    rho = np.array([np.abs(m).max() for m in mult])
-    outputs = [f.outputs(u) for u, *_ in points]
+def _accurate(f: _Map, u, jac, t, kind: str, accuracy: float) -> dict:
+    """A branch point (found on ``f``) at the step that meets ``accuracy``.
+
+    A point that is not a bifurcation is corrected at twice its steps with the parameter
+    held (normal to the branch where that fails), and again at twice those while its
+    outputs change by more than ``accuracy``: its ``estimate`` is the last change, the
+    outputs reported the finest's. A located bifurcation is located again at twice its
+    steps: the change of its location is its ``shift`` and the change of its outputs its
+    ``estimate``; while either exceeds ``accuracy`` (the shift relative to the location)
+    the finer location is taken and located again at twice its steps. Returns the point's
+    values as a dict; ``shift`` is NaN where no location at twice the steps was found,
+    ``estimate`` NaN where no correction at twice the steps converged."""
+    out, estimate, shift, mult_shift = f.outputs(u), math.nan, math.nan, None
+    test = {v: k for k, v in _KINDS.items()}.get(kind)
+    best = None
+    for level in range(MAX_LEVELS):
+        g = f.finer()
+        if test is not None:
+            fine = _relocated(g.precise(), u, t, test)
+            if fine is None:
+                break
+            u2, jac2, t2 = fine
+            shift = (u2[f.D] - u[f.D]) * f.span
+            mult_shift = _multiplier_shift(jac, jac2, f.D)
+        else:
+            t2 = t
+            try:
+                u2, jac2 = _correct(g, u, None, None)
+            except (ArithmeticError, np.linalg.LinAlgError):
+                try:
+                    u2, jac2 = _correct(g, u, t, u)
+                except (ArithmeticError, np.linalg.LinAlgError):
+                    break
+        out2 = g.outputs(u2)
+        estimate = relative_change(out, out2)
+        if test is None:  # (the finer point is reported, its change the estimate)
+            f, u, jac, t, out = g, u2, jac2, t2, out2
+            if estimate <= accuracy:
+                break
+            continue
+        scale = abs(u[f.D] * f.span) or f.span
+        error = max(estimate, abs(shift) / scale)
+        if error <= accuracy or level == MAX_LEVELS - 1:
+            break
+        if best is not None and error >= best[-1]:  # (not converging: the best kept)
+            f, u, jac, t, out, shift, mult_shift, estimate, _ = best
+            break
+        best = (f, u, jac, t, out, shift, mult_shift, estimate, error)
+        # (the finer location, located again at twice its steps)
+        f, u, jac, t, out = g, u2, jac2, t2, out2
+        shift, mult_shift, estimate = math.nan, None, math.nan
+    return {"value": u[f.D] * f.span, "outputs": out, "estimate": estimate,
+            "steps": f.steps, "substep": f.substep, "monodromy": jac[:, :f.D] + np.eye(f.D),
+            "kind": kind, "shift": shift, "multiplier_shift": mult_shift}
+
+
+def _relocated(f: _Map, u, t, test):
+    """The bifurcation of ``test`` found at ``u`` (tangent ``t``) on a coarser map, located
+    again on ``f``: bracketed along ``t`` (RELOCATE_WIDTH, widened until the test changes
+    sign) and bisected (:func:`_locate`). (point, Jacobian, tangent), or None where no
+    bracket or correction is found."""
+    w = RELOCATE_WIDTH
+    for _ in range(RELOCATE_TRIES):
+        ends = []
+        for side in (-1.0, 1.0):
+            guess = u + side * w * t
+            try:
+                end, jac = _correct(f, guess, t, guess)
+            except (ArithmeticError, np.linalg.LinAlgError):
+                return None
+            ends.append((end, jac, _tangent(jac, t)))
+        (a, ja, ta), (b, jb, tb) = ends
+        if test(f, a, ja, ta) * test(f, b, jb, tb) < 0:
+            return _locate(f, a, t, float(t @ (b - a)), test)[1]
+        w *= RELOCATE_GROWTH
+    return None
+
+
+def _multiplier_shift(coarse, fine, D: int) -> np.ndarray:
+    """|mu_fine - mu| [-] of each multiplier of the Jacobian ``coarse`` (D, D + 1) of the
+    map less the identity (in sorted_multipliers' order), each paired with the nearest
+    of ``fine``'s."""
+    mu = sorted_multipliers((coarse[:, :D] + np.eye(D))[None])[0]
+    other = np.linalg.eigvals(fine[:, :D] + np.eye(D))
+    return np.abs(mu[:, None] - other[None, :]).min(axis=1)
+
+
+def _dataset(f: _Map, points: list, parameter: str, preset) -> xr.Dataset:
+    """The branch's CF dataset over ``point`` from the points of :func:`_accurate`."""
+    D, n = f.D, len(points)
+    mult = sorted_multipliers(np.array([pt["monodromy"] for pt in points]))
+    rho = np.abs(mult[:, 0])
     names = list(BIFURCATIONS)
-    flags = np.array([names.index(kind) for *_, kind in points], dtype="i1")
+    flags = np.array([names.index(pt["kind"]) for pt in points], dtype="i1")
     unit = BEAM_PARAMETERS[parameter].unit
-    data = {parameter: (("point",), values, {"units": unit, "long_name":
-                                             BEAM_PARAMETERS[parameter].description}),
+    mult_shift = np.full((n, D), np.nan)
+    for k, pt in enumerate(points):
+        if pt["multiplier_shift"] is not None:
+            mult_shift[k] = pt["multiplier_shift"]
+
+    def column(key):
+        return np.array([pt[key] for pt in points], dtype=float)
+
+    data = {parameter: (("point",), column("value"), {
+                "units": unit, "long_name": BEAM_PARAMETERS[parameter].description}),
             "spectral_radius": (("point",), rho, OUTPUTS["spectral_radius"].attrs),
+            "floquet_multipliers_real": (("point", "multiplier"), mult.real,
+                                         OUTPUTS["floquet_multipliers_real"].attrs),
+            "floquet_multipliers_imag": (("point", "multiplier"), mult.imag,
+                                         OUTPUTS["floquet_multipliers_imag"].attrs),
             "stable": (("point",), (rho < 1).astype("i1"), OUTPUTS["stable"].attrs),
             "bifurcation": (("point",), flags, {**OUTPUTS["bifurcation"].attrs,
-                                                **BIFURCATION_FLAGS})}
+                                                **BIFURCATION_FLAGS}),
+            "error_estimate": (("point",), column("estimate"), {
+                **OUTPUTS["error_estimate"].attrs,
+                "comment": "the change of power, v_peak, x_max, x_min and root_strain_max "
+                           "when the point is corrected again at twice its steps with the "
+                           "parameter held (normal to the branch where that fails, as at a "
+                           "fold); NaN where no correction at twice the steps converged"}),
+            "steps_per_period": (("point",), column("steps").astype("i8"),
+                                 OUTPUTS["steps_per_period"].attrs),
+            "contact_step": (("point",), column("substep"), OUTPUTS["contact_step"].attrs),
+            f"{parameter}_shift": (("point",), column("shift"), {
+                "units": unit,
+                "long_name": f"change of a located bifurcation's {parameter} when it is "
+                             "located again at twice its steps (its discretization error)",
+                "comment": "NaN at points that are not located bifurcations, and where no "
+                           "location at twice the steps was found"}),
+            "floquet_multipliers_shift": (("point", "multiplier"), mult_shift, {
+                "units": "1",
+                "long_name": "change of each Floquet multiplier, |mu at twice the steps - "
+                             "mu|, when a located bifurcation is located again at twice its "
+                             "steps",
+                "comment": "NaN at points that are not located bifurcations"})}
     for name in BRANCH_OUTPUTS:
-        data[name] = (("point",), np.array([o[name] for o in outputs], dtype=float),
-                      OUTPUTS[name].attrs)
+        data[name] = (("point",), np.array([pt["outputs"][name] for pt in points],
+                                           dtype=float), OUTPUTS[name].attrs)
     ds = xr.Dataset(data, coords={"point": ("point", np.arange(n),
-                                            {"units": "1", "long_name": "branch point"})})
+                                            {"units": "1", "long_name": "branch point"}),
+                                  **multiplier_coordinate(D)})
     ds.attrs.update({"Conventions": "CF-1.8", "model": "beam", "parameter": parameter,
                      "title": "harvester_sweep a branch of the beam model's orbits",
                      "source": f"harvester_sweep {__version__} modal engine",
                      "preset": preset or DEFAULT_BEAM_PRESET,
-                     "steps_per_period": f.steps, "contact_step": f.substep})
+                     "accuracy": f.p["accuracy"]})
     return ds

@@ -119,6 +119,12 @@ def _change(a: dict, b: dict) -> float:
     settle)."""
     if a["status"] != _SETTLED or b["status"] != _SETTLED:
         return math.nan
+    return relative_change(a, b)
+
+
+def relative_change(a: dict, b: dict) -> float:
+    """The largest change of the ESTIMATED metrics from outputs a to outputs b, each
+    relative to its size in b (the extremes of displacement to the larger of them) [-]."""
     reach = max(abs(b["x_max"]), abs(b["x_min"]), 1e-300)
     worst = 0.0
     for name in ESTIMATED:
@@ -178,19 +184,8 @@ class _Group:
 
     def jacobians(self, packs, which, states, periods):
         """The monodromy of P^p at each state by forward differences (D + 1 runs)."""
-        D = len(states[0])
-        reps = [pk for pk in packs for _ in range(D + 1)]
-        moved, steps = [], []
-        for j, k in enumerate(which):
-            h = PERTURBATION * self.scale[k]
-            moved.append(states[j])
-            moved.extend(states[j] + np.diag(h))
-            steps.append(h)
-        ends, ok = modal_map.map_states(reps, moved, np.repeat(periods, D + 1))
-        ends = ends.reshape(len(which), D + 1, D)
-        ok = ok.reshape(len(which), D + 1).all(axis=1)
-        jac = (ends[:, 1:] - ends[:, :1]).transpose(0, 2, 1) / np.array(steps)[:, None, :]
-        return jac, ends[:, 0], ok
+        steps = np.array([PERTURBATION * self.scale[k] for k in which])
+        return modal_map.monodromies(packs, states, periods, steps)
 
     def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON):
         """Fixed points of P^p from ``states`` (len(which), D): full Newton with

@@ -136,6 +136,30 @@ def map_states(packs, states, periods) -> tuple:
     return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok
 
 
+def monodromies(packs, states, periods, steps, central=False) -> tuple:
+    """The Jacobian of the period map P^p at each state by finite differences: ``packs``
+    and ``states`` (n, D) as map_states, ``periods`` (n,), ``steps`` (n, D) the step of
+    each component (its unit). Forward differences take D + 1 runs of each point, central
+    ones (``central``) 2 D + 1. Returns (the Jacobians (n, D, D), the images P^p(state)
+    (n, D), ok (n,): False where a run diverged)."""
+    states = np.asarray(states, dtype=float)
+    steps = np.asarray(steps, dtype=float)
+    n, D = states.shape
+    copies = 2 * D + 1 if central else D + 1
+    moved = np.repeat(states[:, None, :], copies, axis=1)
+    moved[:, 1:D + 1] += steps[:, None, :] * np.eye(D)
+    if central:
+        moved[:, D + 1:] -= steps[:, None, :] * np.eye(D)
+    ends, ok = map_states([pk for pk in packs for _ in range(copies)], moved.reshape(-1, D),
+                          np.repeat(np.asarray(periods, dtype=np.int64), copies))
+    ends = ends.reshape(n, copies, D)
+    if central:
+        jac = (ends[:, 1:D + 1] - ends[:, D + 1:]).transpose(0, 2, 1) / (2 * steps[:, None, :])
+    else:
+        jac = (ends[:, 1:D + 1] - ends[:, :1]).transpose(0, 2, 1) / steps[:, None, :]
+    return jac, ends[:, 0], ok.reshape(n, copies).all(axis=1)
+
+
 def _threads(rrows, periods) -> int:
     """Threads for a call of the engine on points ``rrows`` over ``periods`` each (None:
     their budgets): one for a short call (SHORT_CALL), else numba's count, at most one per

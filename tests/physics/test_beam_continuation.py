@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harvester_sweep import bimorph as bm
-from harvester_sweep import continue_branch
+from harvester_sweep import continue_branch, run_scene
 from harvester_sweep.beam_continuation import continue_beam_branch
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
 from harvester_sweep.outputs import BIFURCATIONS
@@ -21,18 +21,33 @@ def _located(ds, parameter="frequency"):
                   in zip(ds["bifurcation"].values, ds[parameter].values) if flag)
 
 
-def test_the_one_mode_beams_folds_and_grazing_are_the_tip_mass_models():
+@pytest.fixture(scope="module")
+def branches():
+    """The one-mode beam's frequency branch through both folds, and the reduced tip-mass
+    model's on the lane engine."""
     beam = continue_beam_branch("frequency", 200.0, 280.0, "bimorph_tip", n_modes=1,
                                 step=0.02)
     p = resolve_beam_parameters("bimorph_tip", n_modes=1)
-    tip = continue_branch("paper", "frequency", 200.0, 280.0,
-                          **bm.as_tip_mass_parameters(bimorph(p)))
-    tip = tip.dataset if hasattr(tip, "dataset") else tip
+    reduced = bm.as_tip_mass_parameters(bimorph(p))
+    tip = continue_branch("paper", "frequency", 200.0, 280.0, **reduced)
+    return beam, tip.dataset if hasattr(tip, "dataset") else tip, reduced
+
+
+def test_the_one_mode_beams_folds_and_grazing_are_the_tip_mass_models(branches):
+    beam, tip, _ = branches
     found, expected = _located(beam), _located(tip)
     assert [kind for kind, _ in found] == [kind for kind, _ in expected] \
         == ["fold", "fold", "grazing"]
     for (_, f_beam), (_, f_tip) in zip(found, expected):
         assert f_beam == pytest.approx(f_tip, rel=1e-7)
+    # each located again at twice its steps moved by its reported shift: the two engines'
+    # locations differ by no more than twice the two shifts
+    shifts = [sorted(zip(ds["frequency"].values[ds["bifurcation"].values > 0],
+                         ds["frequency_shift"].values[ds["bifurcation"].values > 0]))
+              for ds in (beam, tip)]
+    for (f_beam, s_beam), (f_tip, s_tip) in zip(*shifts):
+        assert abs(f_beam - f_tip) <= 2 * (abs(s_beam) + abs(s_tip))
+        assert abs(s_beam) <= 1e-7 * f_beam  # (located to the accuracy target)
     # the branch between its folds is unstable, outside them stable
     folds = sorted(f for kind, f in found if kind == "fold")
     inside = (beam["frequency"] > folds[0] + 1) & (beam["frequency"] < folds[1] - 1)
@@ -42,6 +57,23 @@ def test_the_one_mode_beams_folds_and_grazing_are_the_tip_mass_models():
     # that ran on to the attractor jumped to the other branch's power)
     power = beam["power"].values
     assert np.abs(np.diff(power)).max() <= 0.2 * (power.max() - power.min())
+
+
+def test_branch_points_meet_the_accuracy_and_are_within_twice_their_estimates(branches):
+    """Every point's estimate is at or below the accuracy asked; where the orbit is the
+    only one (below the lower fold, above the upper), the reduced tip-mass model solved by
+    the lane engine at 1e-10 agrees with each point within twice its estimate."""
+    beam, _, reduced = branches
+    estimate = beam["error_estimate"].values
+    assert np.isfinite(estimate).all() and estimate.max() <= 1e-7
+    f = beam["frequency"].values
+    alone = np.flatnonzero((beam["stable"].values == 1) & ((f < 223.0) | (f > 262.0)))
+    for k in alone[::max(1, len(alone) // 6)]:
+        m = run_scene("paper", **reduced, frequency=float(f[k]), accuracy=1e-10).metrics
+        reach = max(abs(m["x_max"]), abs(m["x_min"]))
+        for name, size in (("power", abs(m["power"])), ("v_peak", m["v_peak"]),
+                           ("x_max", reach), ("x_min", reach)):
+            assert abs(float(beam[name][k]) - m[name]) <= 2 * estimate[k] * size + 1e-12 * size
 
 
 @pytest.mark.parametrize("kwargs, words", [
