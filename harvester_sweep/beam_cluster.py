@@ -67,8 +67,6 @@ def run_beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directi
     (default: a sweep file's, sweep_file.DEFAULT_BEAM_CHUNK_SIZE points, at least
     DEFAULT_BEAM_CHUNK_LINES lines).
     """
-    if chunk_size is not None:
-        chunk_size = _whole("chunk_size", chunk_size)
     return run_beam_file(beam_source(axes, preset, directions, chunk_size, **fixed), output,
                          resume=resume, progress=progress, workers=workers,
                          scheduler=scheduler)
