@@ -158,33 +158,39 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
 def beam_dataset(spec, results: list):
     """The dataset of a beam sweep ``spec`` from its chunks' results (in chunk order, as
     chunks.beam_chunk returns them): beam_runs.beam_sweep's, bit for bit."""
-    from .beam_runs import SCALARS, _dataset
+    from .beam_runs import _dataset
 
-    lines = {name: np.concatenate([r[name] for r in results])
-             for name in ("values", "modal_amplitude")}
-    # (lines, points of a line, ...) -> the grid's axes in the file's order, a direction
-    # first where lines are swept
     axes = list(spec.grid)
     dirs = len(spec.directions) if spec.continuation else 1
     along = 1 + (axes.index("frequency") if spec.continuation else len(axes))
-    per_direction = []
-    for name, values in lines.items():
+    solved = [{} for _ in range(dirs)]
+    for name in (name for name in results[0] if name != "run_time"):
+        values = _joined([r[name] for r in results])
+        # (lines, points of a line, ...) -> the grid's axes in the file's order, a
+        # direction first where lines are swept
         grid = values.reshape((dirs,) + tuple(len(spec.grid[a]) for a in spec.line_axes)
                               + (spec.line_length,) + values.shape[2:])
         grid = np.moveaxis(grid, 1 + len(spec.line_axes), along)
-        per_direction.append(grid.reshape((dirs, spec.n_points // dirs) + values.shape[2:]))
-    values, amplitude = per_direction
-    solved = []
-    for d in range(dirs):
-        outputs = {name: values[d, :, k] for k, name in enumerate(SCALARS)}
-        outputs["modal_amplitude"] = amplitude[d]
-        solved.append(outputs)
+        grid = grid.reshape((dirs, spec.n_points // dirs) + values.shape[2:])
+        for d in range(dirs):
+            solved[d][name] = grid[d]
     first = spec.point_parameters(spec.values_at(0))  # (each axis's first value)
     # the stop moves at some point where it does at the grid's largest rod_modes (and a
     # stop on a spring is one at every point)
     corner = dict(spec.base, **{a: spec.grid[a].max() for a in spec.grid})
     return _dataset(solved, spec.grid, spec.directions, first, moving_stop(corner),
                     spec.preset)
+
+
+def _joined(parts: list) -> np.ndarray:
+    """Chunks' arrays of one output (lines, points of a line, width...) one after another,
+    each padded with NaN to the widest (a chunk's points may have fewer modes or a smaller
+    state than another's), as solve_beam pads the points of one call."""
+    if parts[0].ndim > 2:
+        width = max(p.shape[-1] for p in parts)
+        parts = [np.concatenate([p, np.full(p.shape[:-1] + (width - p.shape[-1],), np.nan)],
+                                axis=-1) for p in parts]
+    return np.concatenate(parts)
 
 
 def _run_here(spec, chunks, store, progress) -> None:

@@ -107,14 +107,14 @@ def beam_chunk(spec, chunk: int, progress=None) -> dict:
     one) from its linear steady state.
 
     ``progress(done, total, what)``, if given, is told after each frequency step of the
-    chunk's lines (``total`` steps), or once for points. Returns ``values``: float64
-    (lines, points per line, len(beam_runs.SCALARS)) and ``modal_amplitude``: float64
-    (lines, points per line, the grid's most modes), NaN beyond a point's own modes, both
-    in ascending frequency order along a line.
+    chunk's lines (``total`` steps), or once for points. Returns each output of
+    beam_runs.solve_beam (``BeamSolution.values``) as float64 (lines, points per line,
+    and its own width: the modes, the multipliers, NaN beyond a point's own) in ascending
+    frequency order along a line, and ``run_time``: solve time [s].
     """
     import time
 
-    from .beam_runs import SCALARS, _swept, solve_beam
+    from .beam_runs import _swept, solve_beam
 
     lines = spec.chunk_lines(chunk)
     length = spec.line_length
@@ -129,12 +129,7 @@ def beam_chunk(spec, chunk: int, progress=None) -> dict:
         solved = solve_beam(points)
         if progress is not None:
             progress(1, 1, f"{len(points)} points")
-    modes = spec.grid["n_modes"].max() if "n_modes" in spec.grid else spec.base["n_modes"]
-    amplitude = np.full((len(points), int(modes)), np.nan)
-    found = solved.values["modal_amplitude"]
-    amplitude[:, :found.shape[1]] = found
     shape = (len(lines), length)
-    return {"values": np.stack([solved.values[name] for name in SCALARS], axis=-1)
-            .reshape(shape + (len(SCALARS),)),
-            "modal_amplitude": amplitude.reshape(shape + amplitude.shape[1:]),
+    return {**{name: np.asarray(values).reshape(shape + np.shape(values)[1:])
+               for name, values in solved.values.items()},
             "run_time": np.float64(time.perf_counter() - begun)}
