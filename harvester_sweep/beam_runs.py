@@ -28,8 +28,10 @@ from .beam_parameters import (
     moving_stop,
     resolve_beam_parameters,
 )
+from .datasets import multiplier_coordinate
 from .outputs import OUTPUTS, STATUS_FLAGS
 from .parameters import ParameterError
+from .period_map import sorted_multipliers
 from .version import __version__
 
 #: Halvings of the grid and the contact sub-step the accuracy check may take beyond the
@@ -71,7 +73,8 @@ def system_of(p: dict) -> BeamSystem:
 
 @dataclass
 class BeamSolution:
-    """Points solved: each output (SCALARS, and ``modal_amplitude`` (n, N)) as an array
+    """Points solved: each output (SCALARS, ``modal_amplitude`` (n, N) and the Floquet
+    multipliers' real and imaginary parts (n, D), NaN beyond a point's own) as an array
     over the points, with the end states (n, D) at phase 0 and the last strobes (n,
     SAMPLES, D)."""
 
@@ -145,19 +148,25 @@ def solve_beam(points: list, starts=None) -> BeamSolution:
     systems = [system_of(p) for p in points]
     dims = [len(bs.system.matrix) for bs in systems]
     values = {name: np.full(n, np.nan) for name in SCALARS}
-    modal = [None] * n
+    modal, multipliers = [None] * n, [None] * n
     ends, strobes = [None] * n, [None] * n
     for D in sorted(set(dims)):
         idx = [i for i in range(n) if dims[i] == D]
         _solve_group([points[i] for i in idx], [systems[i] for i in idx],
                      None if starts is None else [starts[i] for i in idx], idx, values,
-                     modal, ends, strobes)
-    width = max(len(m) for m in modal)
-    amp = np.full((n, width), np.nan)
-    for i, m in enumerate(modal):
-        amp[i, :len(m)] = m
-    values["modal_amplitude"] = amp
+                     modal, multipliers, ends, strobes)
+    values["modal_amplitude"] = _padded(modal)
+    values["floquet_multipliers_real"] = _padded([m.real for m in multipliers])
+    values["floquet_multipliers_imag"] = _padded([m.imag for m in multipliers])
     return BeamSolution(values, ends, strobes)
+
+
+def _padded(rows: list) -> np.ndarray:
+    """Rows of different lengths as one array, NaN beyond each row's own."""
+    out = np.full((len(rows), max(len(r) for r in rows)), np.nan)
+    for i, r in enumerate(rows):
+        out[i, :len(r)] = r
+    return out
 
 
 class _Group:
@@ -227,7 +236,7 @@ class _Group:
         return modal_map.run(self.packs(which, lv), states)
 
 
-def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
+def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends, strobes):
     g = _Group(points, systems, [None] * len(points) if starts is None else starts)
     n = len(points)
     todo = list(range(n))
@@ -277,6 +286,7 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
                 coarse[k] = fine
                 nxt.append(k)
         todo, lv = nxt, lv + 1
+    mult = _multipliers(g, done)
     for k in range(n):
         ((table, amp), end, strobe, lv_k), est = done[k]
         i = idx[k]
@@ -287,9 +297,29 @@ def _solve_group(points, systems, starts, idx, values, modal, ends, strobes):
         steps, sub = g.first[k]
         values["steps_per_period"][i] = steps * 2 ** lv_k
         values["contact_step"][i] = sub / 2 ** lv_k
-        rho = np.abs(np.linalg.eigvals(jac[k])).max() if np.isfinite(jac[k]).all() else np.nan
-        values["spectral_radius"][i] = rho
+        values["spectral_radius"][i] = abs(mult[k][0]) if k in mult else np.nan
         modal[i], ends[i], strobes[i] = amp, end, strobe
+        multipliers[i] = mult.get(k, np.full(len(end), np.nan))
+
+
+def _multipliers(g: _Group, done: dict) -> dict:
+    """The Floquet multipliers (largest modulus first) of each settled point of ``done``
+    (point -> ((outputs, end state, strobes, level), estimate)): the monodromy of its
+    orbit by forward differences at the level reported. Newton's monodromy at the first
+    level is off by that level's discretization error (1e-5 to 1e-4 in the multipliers on
+    the presets), the forward differences' own error is 1e-6 or less."""
+    settled = [k for k, ((out, *_), _) in done.items() if out[0]["status"] == _SETTLED]
+    found = {}
+    for lv in sorted({done[k][0][3] for k in settled}):
+        which = [k for k in settled if done[k][0][3] == lv]
+        periods = np.array([max(int(done[k][0][0][0]["orbit_period"]), 1) for k in which])
+        jac, _, ok = modal_map.monodromies(
+            g.packs(which, lv), np.array([done[k][0][1] for k in which]), periods,
+            np.array([PERTURBATION * g.scale[k] for k in which]))
+        for j, k in enumerate(which):
+            if ok[j]:
+                found[k] = sorted_multipliers(jac[j][None])[0]
+    return found
 
 
 def points_of(preset: str | None, fixed: dict, axes: dict) -> tuple[list, list]:
@@ -412,8 +442,9 @@ def _variables(values: dict, axes, shape, moving) -> xr.Dataset:
     data = {}
     for name, v in values.items():
         o = OUTPUTS[name]
-        if name == "modal_amplitude":
-            data[name] = (list(axes) + ["mode"], v.reshape(shape + [v.shape[-1]]), o.attrs)
+        if o.dims:  # (the modes, the multipliers)
+            data[name] = (list(axes) + list(o.dims), v.reshape(shape + [v.shape[-1]]),
+                          o.attrs)
         else:
             dtype = o.dtype if name != "status" else "int8"
             arr = v.reshape(shape)
@@ -423,6 +454,8 @@ def _variables(values: dict, axes, shape, moving) -> xr.Dataset:
     ds = xr.Dataset(data, coords=coords)
     ds = ds.assign_coords(mode=("mode", np.arange(1, ds.sizes["mode"] + 1),
                                 {"units": "1", "long_name": "bending mode number"}))
+    if "multiplier" in ds.dims:
+        ds = ds.assign_coords(multiplier_coordinate(ds.sizes["multiplier"]))
     if "status" in ds:
         ds["status"].attrs.update(STATUS_FLAGS)
     if not moving:  # a metric the model lacks: absent, not NaN

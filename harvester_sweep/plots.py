@@ -803,7 +803,7 @@ def plot_beam_sweep(ds, path=None) -> Figure:
     tip displacement extremes [um] and root strain [microstrain] against it, one curve per
     direction. Two grid axes: maps of the power and of the root strain (the first
     direction's, where there are several)."""
-    grid = [d for d in ds.dims if d not in ("direction", "mode")]
+    grid = [d for d in ds.dims if d not in ("direction", "mode", "multiplier")]
     directions = list(ds["direction"].values) if "direction" in ds.dims else [None]
     if len(grid) == 1:
         axis = grid[0]

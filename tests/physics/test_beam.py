@@ -69,6 +69,13 @@ def test_one_mode_at_the_tip_is_the_tip_mass_model():
     assert v["impacts_per_period"][0] == tip_mass.metrics["impacts_per_period"] == 1
     for name in ("power", "v_peak", "x_max", "x_min", "approach_velocity"):
         assert v[name][0] == pytest.approx(tip_mass.metrics[name], rel=2e-7), name
+    # the Floquet multipliers: the beam's from forward differences at its reported step
+    # (about 1e-6), the lane engine's from central ones
+    mu = v["floquet_multipliers_real"][0] + 1j * v["floquet_multipliers_imag"][0]
+    ref = (np.array(tip_mass.metrics["floquet_multipliers_real"])
+           + 1j * np.array(tip_mass.metrics["floquet_multipliers_imag"]))
+    assert np.abs(mu - ref).max() <= 2e-6
+    assert v["spectral_radius"][0] == abs(mu[0])
 
 
 def test_one_rod_mode_is_the_stop_on_a_spring():
