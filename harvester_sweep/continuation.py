@@ -33,7 +33,9 @@ peak voltage, lam by the range), and the arclength is measured in them.
   the bracket fails, the end of the step is flagged, the step its bracket.
 - **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
   from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
-  the period-p orbit along the eigenvector of the multiplier -1.
+  the period-p orbit along the eigenvector of the multiplier -1. A branch of even period
+  ends where its orbit has half that period (``COLLAPSED``): it has met the orbit it
+  doubles, and would follow it under twice its period.
 - **Error.** Every point is corrected again at twice its steps per period (its Jacobian
   reused): at its own parameter value, the change of its metrics is its
   ``error_estimate`` (near a fold, where that orbit may not exist, it is taken normal to
@@ -99,6 +101,19 @@ REVISIT = 1e-6
 #: scale, 1e18 Hz for the paper's scene: M - I read 2e-10, the noise of rounding over the
 #: monodromy's copies at period_map.CENTRAL), and any state passes for its orbit.
 UNRESOLVED = 100 * np.finfo(float).eps / CENTRAL
+#: A period-p branch point whose state comes back to itself after p/2 periods within this
+#: (scaled components) is an orbit of period p/2: the doubled branch has met the orbit it
+#: doubles (_collapsed) [-]. Newton leaves such an orbit's P^(p/2) residual near rounding
+#: (1e-15 measured), a doubled orbit next to its birth is 1e-2 away.
+COLLAPSED = 1e-6
+#: Re-solves of a branch point at a finer step for the accuracy target [-]: more than a
+#: sweep point's REFINEMENTS, as next to a period doubling's birth the doubled orbit's
+#: distance from the orbit it doubles moves with the doubling's location, which wanders
+#: with the step about its fourth-order trend, and the estimate with it (a point 2e-4 Hz
+#: from the strong-coupling doubling at 145.32 Hz: 4.7e-5 at 1088 steps a period, then
+#: 1.6e-7, 6.8e-7, 1.1e-7 and 4.7e-9 at 5584, 6928, 13856 and 15744 steps). The other
+#: points stop where they meet the target, so this costs only where it is needed.
+POINT_REFINEMENTS = 6
 #: Packed rows kept for parameter values already visited [-].
 ROW_CACHE = 4096
 #: Corrections the location of one bifurcation may take [-].
@@ -549,7 +564,8 @@ def _continue(spec: ContinuationSpec) -> Branch:
                 if (point.bifurcation == list(BIFURCATIONS).index("period_doubling")
                         and 2 * point.period <= MAX_ORBIT_PERIOD):
                     doubled = _doubled(problem, point, step)
-                    if doubled is not None:
+                    # (a head that Newton took back to the orbit it doubles starts nothing)
+                    if doubled is not None and not _collapsed(problem, doubled):
                         queue.append((doubled, len(out.stops) + len(queue)))
     out.points = [_accurate(problem, point, spec.accuracy, spec.max_steps)
                   for point in out.points]
@@ -577,6 +593,10 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
             b.tangent = problem.tangent(b.jacobian, a.tangent)
             b.branch = a.branch
             turn = math.acos(min(1.0, float(a.tangent @ b.tangent)))
+        if b is not None and turn <= MAX_TURN and _collapsed(problem, b):
+            return points, (f"back on a period-{b.period // 2} orbit at {problem.parameter} "
+                            f"= {problem.lam(b.z):.9g} (the period-doubled orbit met the "
+                            "orbit it doubles, at a period doubling of that one)")
         if b is None or turn > MAX_TURN:
             ds *= 0.5
             if ds < min_step and unresolved is not None:
@@ -640,6 +660,20 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
         ds = min(ds * (1.6 if easy else 1.0), max_step) if turn < 0.7 * MAX_TURN else 0.7 * ds
         ds = max(ds, min_step)
     return points[:budget], "the budget of points was spent"
+
+
+def _collapsed(problem: _Problem, point: _Point) -> bool:
+    """Whether the period-p orbit of ``point`` (p even) is an orbit of period p / 2: a
+    period-doubled branch that has come back to the orbit it doubles, at a period doubling
+    of that orbit, and gone on along it (every fixed point of P^(p/2) is one of P^p too).
+    Followed further, it would repeat that branch labelled with twice its period, and the
+    points beside the meeting, where two branches cross and the doubled orbit's distance
+    from the other grows like the square root of the parameter's, have error estimates that
+    do not fall with the step at RK4's order (docs/numerics.md)."""
+    if point.period % 2:
+        return False
+    half = problem.phases(point.z, point.period // 2, point.state)[-1] / problem.scale
+    return bool(np.max(np.abs(half - point.z[:problem.D])) < COLLAPSED)
 
 
 def _passes(head, a, b) -> bool:
@@ -748,12 +782,12 @@ def _accurate_point(problem: _Problem, point: _Point, accuracy: float,
                     max_steps: float) -> _Point:
     """``point`` with its error estimate (:func:`_estimate`), solved again while the
     estimate is above ``accuracy`` at the step the fourth order asks for, as a sweep point
-    (up to REFINEMENTS times, within ``max_steps`` steps per period): the branch is
+    (up to POINT_REFINEMENTS times, within ``max_steps`` steps per period): the branch is
     followed at one step, and a point whose estimate asks for a finer one is re-solved at
     it alone (:func:`_resolve`). A refinement that fails keeps the point it had."""
     _estimate(problem, point)
     coarser, refine = (math.nan, math.nan), 0
-    while math.isfinite(accuracy) and point.error > accuracy and refine < REFINEMENTS:
+    while math.isfinite(accuracy) and point.error > accuracy and refine < POINT_REFINEMENTS:
         steps = _next_steps(point.steps, point.error, accuracy, coarser, refine)
         if steps > max_steps:
             break
@@ -830,9 +864,14 @@ def _accurate_bifurcation(problem: _Problem, point: _Point, accuracy: float,
         coarser, refine = (point.steps, error), refine + 1
         point, fine = finer, finer_fine
         _estimate(problem, point)
-    point.shift = math.nan if fine is None else fine.lam - point.lam
-    if fine is not None:
-        point.multiplier_shift = _multiplier_shift(point.monodromy, fine.monodromy)
+    if fine is None:
+        # (no location at twice the steps, so no shift to tell: the point is still a point
+        # of the branch, refined as any other so that its own estimate meets the target)
+        point = _accurate_point(problem, point, accuracy, max_steps)
+        point.shift = math.nan
+        return point
+    point.shift = fine.lam - point.lam
+    point.multiplier_shift = _multiplier_shift(point.monodromy, fine.monodromy)
     return point
 
 
