@@ -485,7 +485,8 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
     """One beam point to steady state, then ``periods`` forcing periods of its orbit
     recorded at every grid step, contact sub-step and switch: (its outputs, a CF dataset
     of the time history: time [s], tip and contact displacement [m], voltage [V], power
-    [W], contact force [N], root strain [-], rod face [m])."""
+    [W], contact force [N], root strain [-], rod face [m]; with the outputs, the preset
+    and the parameters, as ``beam-scene --out`` writes it)."""
     p = resolve_beam_parameters(preset, **overrides)
     sol = solve_beam([p])
     bs = system_of(p)
@@ -527,8 +528,32 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
         series = series.drop_vars("stop_face")
     outputs = {name: sol.values[name][0] for name in SCALARS}
     outputs["modal_amplitude"] = sol.values["modal_amplitude"][0]
-    series.attrs.update({"model": "beam", "Conventions": "CF-1.8"})
-    return outputs, series
+    return outputs, _scene_dataset(series, outputs, p, preset or DEFAULT_BEAM_PRESET)
+
+
+def _scene_dataset(series: xr.Dataset, outputs: dict, p: dict, preset: str) -> xr.Dataset:
+    """A scene's time history with what its file needs to stand alone: its outputs as
+    variables (CF attributes from outputs.OUTPUTS; a metric the model lacks absent, not
+    NaN), the preset and the parameters."""
+    for name, value in outputs.items():
+        o = OUTPUTS[name]
+        if name == "stop_face_max" and not moving_stop(p):
+            continue
+        if name == "modal_amplitude":
+            series[name] = ("mode", np.ravel(value), o.attrs)
+            continue
+        dtype = o.dtype if name != "status" else "int8"
+        if np.issubdtype(np.dtype(dtype), np.integer):
+            value = np.nan_to_num(value, nan=-1)
+        series[name] = ((), np.asarray(value).astype(dtype), o.attrs)
+    series["status"].attrs.update(STATUS_FLAGS)
+    series = series.assign_coords(mode=("mode", np.arange(1, series.sizes["mode"] + 1),
+                                        {"units": "1", "long_name": "bending mode number"}))
+    series.attrs.update({"title": "harvester_sweep: a beam orbit's time history",
+                         "model": "beam", "Conventions": "CF-1.8", "preset": preset})
+    series.attrs.update({f"parameter_{name}": value if not isinstance(value, bool)
+                         else int(value) for name, value in p.items() if value is not None})
+    return series
 
 
 __all__ = ["BeamSolution", "beam_scene", "beam_sweep", "solve_beam"]

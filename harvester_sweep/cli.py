@@ -816,7 +816,7 @@ def _beam_scene(args) -> int:
         with _writing(args.output):
             from .datasets import write_netcdf
 
-            write_netcdf(_beam_series(series, outputs, p, preset), args.output)
+            write_netcdf(series, args.output)
     return 0
 
 
@@ -880,40 +880,6 @@ def _beam_table(rows: list, p: dict, preset: str, status: str) -> str:
     lines += [f"  {name:<{name_w}} {value:>{value_w}}  {unit:<{unit_w}} {long_name}".rstrip()
               for name, value, unit, long_name in shown]
     return "\n".join(lines)
-
-
-def _beam_series(series, outputs: dict, p: dict, preset: str):
-    """The time history of beam_scene with what the file needs to stand alone: its
-    outputs (CF attributes from outputs.OUTPUTS), preset and parameters, where beam_scene
-    did not put them there itself."""
-    from .beam_parameters import moving_stop
-    from .outputs import OUTPUTS, STATUS_FLAGS
-
-    ds = series.copy()
-    for name, value in outputs.items():
-        if name in ds or name not in OUTPUTS:
-            continue
-        if name == "stop_face_max" and not moving_stop(p):
-            continue  # (a metric the model does not have is absent, not NaN)
-        if name == "modal_amplitude":
-            values = np.ravel(value)
-            ds[name] = ("mode", values, OUTPUTS[name].attrs)
-            if "mode" not in ds.coords:
-                ds = ds.assign_coords(mode=("mode", np.arange(1, len(values) + 1),
-                                            {"units": "1", "long_name": "bending mode number"}))
-        elif name == "status":
-            ds[name] = ((), np.int8(value), {**OUTPUTS[name].attrs, **STATUS_FLAGS})
-        elif name in _BEAM_COUNTS and np.isfinite(value):
-            ds[name] = ((), np.int64(value), OUTPUTS[name].attrs)
-        else:
-            ds[name] = ((), float(value), OUTPUTS[name].attrs)
-    defaults = {"title": "harvester_sweep: a beam orbit's time history", "model": "beam",
-                "Conventions": "CF-1.8", "preset": preset}
-    defaults.update({f"parameter_{name}": value if not isinstance(value, bool) else int(value)
-                     for name, value in p.items() if value is not None})
-    for key, value in defaults.items():
-        ds.attrs.setdefault(key, value)
-    return ds
 
 
 def _beam_branch_or_basins(args) -> int:
