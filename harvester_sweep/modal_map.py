@@ -122,6 +122,20 @@ def run(packs, starts) -> tuple:
     return metrics, ends, strobes
 
 
+def measure(packs, states, periods) -> np.ndarray:
+    """Each orbit measured over its ``periods`` (n,) forcing periods from its state (n, D)
+    at phase 0 (``packs`` as run): the metric rows, as run's, with the status settled
+    unless the run diverged."""
+    D, S, K = packs[0].dims
+    z = np.array([pk.to_modal(y) for pk, y in zip(packs, states)], dtype=complex)
+    rrows = np.array([pk.rrow for pk in packs])
+    periods = np.asarray(periods, dtype=np.int64)
+    metrics = np.empty((len(packs), modal.metric_size(K)))
+    modal.measure_points(np.array([pk.crow for pk in packs]), rrows, z, periods, metrics,
+                         _threads(rrows, periods), D, S, K)
+    return metrics
+
+
 def map_states(packs, states, periods) -> tuple:
     """The period map: each state (n, D) at phase 0 after ``periods`` (n,) forcing periods
     of its point (``packs``, one model's dimensions). Returns (end states (n, D), ok (n,):

@@ -514,41 +514,60 @@ def run_point(c, r, z, metrics, ring, D, S, K):
     (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
      y_p, scale) = _tables(c, r, D, S, K)
     omega, steps, substep = r[0], int(r[1]), r[2]
-    max_periods, settle, limit, R, volt = int(r[3]), r[4], r[5], r[6], int(r[7])
+    max_periods, settle, limit = int(r[3]), r[4], r[5]
     T = 2.0 * math.pi / omega
     st = _start(z, omega, pen, pen_p, pl, gap, ch, D, S)
+    rec = np.empty((0, 1))
+    buf = np.zeros((SAMPLES, D))
+    acc = np.zeros(metrics.shape[0])
+    p, status, run, _ = _advance(z, st, max_periods, False, rec, -1, omega, T, steps, substep,
+                                 lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out,
+                                 outl, out_p, out_f, volt_of(r), strobe, y_p, scale, settle,
+                                 limit, buf, acc, D, S, K)
+    if status == SETTLED and p == 0:
+        status = NOT_SETTLED
+    _measure(c, r, z, st, max(p, 1), status, metrics, buf, D, S, K)
+    metrics[HEAD.period] = p
+    n = st[3]
+    for k in range(SAMPLES):
+        ring[k] = buf[(n + k) % SAMPLES]
+
+
+@njit(inline="always", **JIT)
+def volt_of(r):
+    """The voltage's index among the outputs, from a real row."""
+    return int(r[7])
+
+
+@njit(**JIT)
+def _measure(c, r, z, st, periods, status, metrics, buf, D, S, K):
+    """Measure ``periods`` forcing periods from z (modified) in contact state ``st``
+    (modified) into metrics (layout.HEAD, then each output's largest and smallest value);
+    ``status`` the outcome so far (not measured where it is DIVERGED)."""
+    (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
+     y_p, scale) = _tables(c, r, D, S, K)
+    omega, steps, substep, limit, R = r[0], int(r[1]), r[2], r[5], r[6]
+    T = 2.0 * math.pi / omega
     acc = np.zeros(metrics.shape[0])
     acc[_NH:_NH + K] = -np.inf
     acc[_NH + K:] = np.inf
-    rec = np.empty((0, 1))
-    buf = np.zeros((SAMPLES, D))
-    p, status, run, _ = _advance(z, st, max_periods, False, rec, -1, omega, T, steps, substep,
-                                 lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out,
-                                 outl, out_p, out_f, volt, strobe, y_p, scale, settle, limit,
-                                 buf, acc, D, S, K)
-    if status == SETTLED and p == 0:
-        status = NOT_SETTLED
-    periods_measured = max(p, 1)
     if status != DIVERGED:
-        _, status2, _, _ = _advance(z, st, periods_measured, True, rec, -1, omega, T, steps,
-                                    substep, lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh,
-                                    ch, out, outl, out_p, out_f, volt, strobe, y_p, scale, 0.0,
-                                    limit, buf, acc, D, S, K)
+        _, status2, _, _ = _advance(z, st, periods, True, np.empty((0, 1)), -1, omega, T,
+                                    steps, substep, lam, grid, pen, pl, pl2, pen_p, pab, inp,
+                                    gap, kh, ch, out, outl, out_p, out_f, volt_of(r), strobe,
+                                    y_p, scale, 0.0, limit, buf, acc, D, S, K)
         if status2 == DIVERGED:
             status = DIVERGED
     metrics[:] = acc
     metrics[HEAD.status] = status
     metrics[HEAD.periods_run] = st[3]
-    metrics[HEAD.period] = p
-    metrics[_IMPACTS] = acc[_IMPACTS] / periods_measured
-    span = periods_measured * T
+    metrics[HEAD.period] = periods
+    metrics[_IMPACTS] = acc[_IMPACTS] / periods
+    span = periods * T
     metrics[_POWER] = acc[_POWER] / (R * span)
     metrics[HEAD.voltage_rms] = math.sqrt(acc[_POWER] / span)
     if acc[_IMPACTS] == 0.0:
         metrics[_APPROACH] = np.nan
-    n = st[3]
-    for k in range(SAMPLES):
-        ring[k] = buf[(n + k) % SAMPLES]
 
 
 @njit(parallel=True, **JIT)
@@ -565,6 +584,29 @@ def settle_points(crows, rrows, z, metrics, strobes, threads, D, S, K):
         while i < n:
             run_point(crows[i], rrows[i], z[i], metrics[i], strobes[i], D, S, K)
             i = fetch_add(taken, 0)
+
+
+@njit(parallel=True, **JIT)
+def measure_points(crows, rrows, z, periods, metrics, threads, D, S, K):
+    """Every point's orbit measured over its ``periods[i]`` forcing periods from z (n, D)
+    (replaced by the end), taken to be on the orbit: metrics as settle_points', the
+    status SETTLED unless the run diverged; points taken as settle_points does."""
+    n = crows.shape[0]
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(threads):
+        i = fetch_add(taken, 0)
+        while i < n:
+            _measure_point(crows[i], rrows[i], z[i], periods[i], metrics[i], D, S, K)
+            i = fetch_add(taken, 0)
+
+
+@njit(**JIT)
+def _measure_point(c, r, z, periods, metrics, D, S, K):
+    """One point of measure_points."""
+    (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
+     y_p, scale) = _tables(c, r, D, S, K)
+    st = _start(z, r[0], pen, pen_p, pl, gap, ch, D, S)
+    _measure(c, r, z, st, periods, SETTLED, metrics, np.zeros((SAMPLES, D)), D, S, K)
 
 
 @njit(**JIT)
