@@ -314,3 +314,23 @@ def test_beam_sweep_reads_and_checks_its_file_once(tmp_path, monkeypatch):
     assert cli.main(["beam-sweep", str(path), "--output", str(tmp_path / "s.nc"),
                      "--quiet"]) == 0
     assert len(reads) == 1, reads
+
+
+def test_an_axis_sweep_on_the_command_line_is_kept_for_resume_too(whole, tmp_path, capsys,
+                                                                  monkeypatch):
+    out = tmp_path / "axes.nc"
+    argv = ["beam-sweep", "--axis", "gap=1e-6,2e-6,3e-6", "--axis", "frequency=230:260:4",
+            "--direction", "both", "--set", "n_modes=1", "--quiet", "--output", str(out)]
+    save = chunk_store.ChunkStore.save
+
+    def save_then_ctrl_c(self, chunk, result):
+        save(self, chunk, result)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(chunk_store.ChunkStore, "save", save_then_ctrl_c)
+    assert cli.main(argv) == 130
+    monkeypatch.undo()
+    assert "--resume" in capsys.readouterr().err
+    assert cli.main(argv + ["--resume"]) == 0
+    with xr.open_dataset(out) as written:  # (the default chunks: one a direction)
+        assert_same_bits(written, whole)
