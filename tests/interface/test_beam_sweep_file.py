@@ -199,12 +199,15 @@ def test_lines_along_a_first_axis_are_put_back_in_the_files_order():
 
 
 def test_an_unswept_grid_in_chunks_of_points_from_a_file_is_beam_sweeps(tmp_path):
-    # n_modes on an axis: chunks of one and of two modes, modal_amplitude padded alike
+    # n_modes on an axis: a chunk of one mode, one of two, their outputs over the modes
+    # and the multipliers padded alike when the chunks are put together
     grid = {"n_modes": [1, 2], "frequency": [230.0, 250.0, 270.0]}
-    ds = run_beam_file({"model": "beam", "grid": grid, "sweep": {"chunk_size": 4}})
+    ds = run_beam_file({"model": "beam", "grid": grid, "sweep": {"chunk_size": 3}})
     xr.testing.assert_identical(ds, beam_sweep(grid, "bimorph_tip"))
     assert ds.sizes["mode"] == 2 and np.isnan(ds["modal_amplitude"].sel(n_modes=1,
                                                                         mode=2)).all()
+    one_mode = ds.sel(n_modes=1).isel(multiplier=slice(3, None))  # (a state of 3)
+    assert np.isnan(one_mode["floquet_multipliers_imag"]).all()
 
 
 def test_the_cli_runs_a_file_stopped_by_ctrl_c_and_resumed(whole, tmp_path, capsys,
