@@ -23,9 +23,10 @@ before the run:
 A run of chunks (lines_per_chunk lines each, one after another) then takes, per chunk,
 its rounds (the slowest point's from rest; a line's, its points' one after another) at a
 round's cost, plus each point's rounds at their share and its steps at the engine's rate
-on the threads its calls take. On the examples and the benchmark grids this holds within a
-factor 3 of the measured time (benchmarks/estimate.py, benchmarks/results/estimate_44.md).
-The sample costs some rounds of its own (tens of milliseconds; a sweep's sample is measured
+on the threads its calls take. How near the runs came, on the examples and the benchmark
+grids: benchmarks/estimate.py, benchmarks/results/estimate_44.md. The machine is measured
+as it is when the run starts: a load that comes or goes later moves the run, not this.
+The sample costs some rounds of its own (0.01 to 0.5 s; a sweep's sample is measured
 once per process) and changes no result: the run solves every point afresh. The progress
 bar's ETA, from the run's own rate, takes over once the sweep runs.
 """
@@ -41,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import period_map, timescales
-from ._engine import LANES, METRIC, PARAM
+from ._engine import LANES, METRIC, PARAM, STATUS
 from .orbits import solve_orbits
 from .packing import pack_points
 from .parameters import ParameterError
@@ -62,7 +63,7 @@ SAMPLE_STEPS = 1_000_000
 POINT_ROUND_SHARE = 0.01
 #: Timed runs of the engine's rate, the best taken [-].
 RATE_RUNS = 3
-#: RK4 steps of one timed run of the engine's rate (tens of milliseconds) [-].
+#: RK4 steps of one timed run of the engine's rate (about 10 ms) [-].
 RATE_STEPS = 1_000_000
 #: Steps below which an engine call runs on one thread (_engine's scheduler.SHORT_CALL) [-].
 SHORT_CALL = 200_000
@@ -299,7 +300,8 @@ def _measure(packed, successors, estimated, setup: float) -> Sample:
     rounds = np.where(heads, done, np.maximum(done - before, 1.0))
     # A point cut short by the sample's budget runs on to its own.
     run = orbits.metrics[:, METRIC.periods_run]
-    short = (orbits.metrics[:, METRIC.status] != 0) & (run >= rows[:, PARAM.max_periods]) \
+    short = (orbits.metrics[:, METRIC.status] != STATUS.settled) \
+        & (run >= rows[:, PARAM.max_periods]) \
         & (budget > rows[:, PARAM.max_periods])
     more = np.where(short, budget / np.maximum(run, 1.0), 1.0)
     rate, rating = _engine_rate(rows, orbits.finals, packed.refused)
