@@ -40,8 +40,10 @@ peak voltage, lam by the range), and the arclength is measured in them.
   reused): at its own parameter value, the change of its metrics is its
   ``error_estimate`` (near a fold, where that orbit may not exist, it is taken normal to
   the branch); normal to the branch, the change of the parameter is the point's shift.
-  A located bifurcation is located again at twice its steps, and the change of its
-  location is its shift (fold, period doubling, Neimark-Sacker and grazing alike).
+  A located bifurcation is located again at twice its steps and at 3/2 of them, and the
+  larger change of its location is its shift (fold, period doubling, Neimark-Sacker and
+  grazing alike: one ratio alone can happen to be small, as the map's error wanders with
+  the step).
 - **Accuracy.** The branch is followed at one step; where that step was chosen
   automatically, a point whose estimate is above ``accuracy`` is solved again alone at
   the step the fourth order asks for, as a sweep point (accuracy.refined_steps), and a
@@ -346,7 +348,9 @@ class _Problem:
             return point.tested
         mult = np.linalg.eigvals(point.monodromy)
         pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
-        ns = np.abs(mult[pair][0]) ** 2 - 1 if pair.any() else math.nan
+        # (the outermost pair: a moving stop adds a second one, and the first in eigvals'
+        # order could be either, so that the sign changed where the order did)
+        ns = np.abs(mult[pair]).max() ** 2 - 1 if pair.any() else math.nan
         # the point's own stops (the continued parameter may be a gap)
         r = self.row(self.lam(point.z), self.steps)
         m = point.metrics
@@ -834,45 +838,68 @@ RELOCATE_TRIES = 5
 
 def _accurate_bifurcation(problem: _Problem, point: _Point, accuracy: float,
                           max_steps: float) -> _Point:
-    """The located bifurcation ``point`` located again at twice its steps per period: the
-    change of its parameter value is its ``shift``, its location's discretization error
-    (fold, period doubling, Neimark-Sacker and grazing alike). While that shift is above
-    ``accuracy`` relative to the value (to the range where the value is 0), the
-    bifurcation is located again at the step the fourth order asks for, and at twice that
-    (up to REFINEMENTS times, within ``max_steps``), and so while the point's own error
-    estimate (:func:`_estimate`, normal to the branch where the orbit at its value does
-    not converge) is above it. The point returned is the location at the finest step
-    whose twice-the-steps location was found. ``shift`` is NaN where no location at twice
-    the steps was found."""
+    """The located bifurcation ``point`` located again at twice its steps per period and at
+    3/2 of them (:func:`_changes`): the larger change of its parameter value is its
+    ``shift``, its location's discretization error (fold, period doubling, Neimark-Sacker
+    and grazing alike). While that shift is above ``accuracy`` relative to the value (to
+    the range where the value is 0), the bifurcation is located again at the step the
+    fourth order asks for, and at twice and 3/2 that (up to REFINEMENTS times, within
+    ``max_steps``), and so while the point's own error estimate (:func:`_estimate`,
+    normal to the branch where the orbit at its value does not converge) is above it. The
+    point returned is the location at the finest step whose changes were found. Where
+    none was, ``shift`` is NaN and the point is refined as any other
+    (:func:`_accurate_point`)."""
     k = _which_test(problem, point)
     scale = abs(point.lam) or problem.range
     coarser, refine = (math.nan, math.nan), 0
-    fine = _relocate(problem, point, k, 2 * point.steps)
+    changes = _changes(problem, point, k)
     _estimate(problem, point)
-    while fine is not None:
+    while changes is not None:
         # (the point is a point of the branch too: its own estimate counts)
-        error = max(abs(fine.lam - point.lam) / scale, point.error)
+        error = max(abs(changes[0]) / scale, point.error)
         if not (math.isfinite(accuracy) and error > accuracy and refine < REFINEMENTS):
             break
         steps = _next_steps(point.steps, error, accuracy, coarser, refine)
         if 2 * steps > max_steps:
             break
-        finer = _relocate(problem, fine, k, steps)  # (from the nearer location)
-        finer_fine = None if finer is None else _relocate(problem, finer, k, 2 * steps)
-        if finer_fine is None:
+        finer = _relocate(problem, changes[2], k, steps)  # (from the nearer location)
+        finer_changes = None if finer is None else _changes(problem, finer, k)
+        if finer_changes is None:
             break
         coarser, refine = (point.steps, error), refine + 1
-        point, fine = finer, finer_fine
+        point, changes = finer, finer_changes
         _estimate(problem, point)
-    if fine is None:
-        # (no location at twice the steps, so no shift to tell: the point is still a point
+    if changes is None:
+        # (no location at another step, so no shift to tell: the point is still a point
         # of the branch, refined as any other so that its own estimate meets the target)
         point = _accurate_point(problem, point, accuracy, max_steps)
         point.shift = math.nan
         return point
-    point.shift = fine.lam - point.lam
-    point.multiplier_shift = _multiplier_shift(point.monodromy, fine.monodromy)
+    point.shift, point.multiplier_shift = changes[0], changes[1]
     return point
+
+
+def _changes(problem: _Problem, point: _Point, k: int):
+    """The change of the location ``point`` of test function ``k`` when located again at
+    twice its steps and at 3/2 of them, the larger (signed) [parameter's unit], the larger
+    change of each multiplier [-] and the location at twice the steps (or at 3/2 where
+    that one failed); None where neither was found. One step ratio is not enough: the map
+    jumps where a contact switch crosses a step's end, and a location's error wanders with
+    the step about its fourth-order trend, so that one change can happen to be small (the
+    Neimark-Sacker point of a stop on a spring at 9568 steps a period: 2.8e-7 Hz at twice
+    them, 1.15e-5 Hz at 3/2, 7.1e-6 Hz from the SciPy reference's; docs/numerics.md)."""
+    found = []
+    for steps in (2 * point.steps,
+                  STEPS_QUANTUM * math.ceil(1.5 * point.steps / STEPS_QUANTUM)):
+        other = _relocate(problem, point, k, steps)
+        if other is not None:
+            found.append(other)
+    if not found:
+        return None
+    shift = max((other.lam - point.lam for other in found), key=abs)
+    multipliers = np.max([_multiplier_shift(point.monodromy, other.monodromy)
+                          for other in found], axis=0)
+    return shift, multipliers, found[0]
 
 
 def _multiplier_shift(coarse, fine) -> np.ndarray:
