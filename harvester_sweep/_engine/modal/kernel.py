@@ -50,6 +50,11 @@ NEAR = 1e3
 SEARCH = 80
 #: Secant steps of a contact sub-step onto the switch that ends it [-].
 SECANT = 3
+#: Pieces per cycle of the fastest component that a contact-free step is cut into where
+#: the bound on its penetration cannot rule out a touch inside it (_hidden), and the
+#: deepest halving of a step [-].
+PIECES = 8
+DEPTH = 48
 #: Outcome codes, as the lane engine's STATUS.
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
 #: Kinds of switch that turn a surface's force on or off.
@@ -188,6 +193,110 @@ def _peak(s, z, t0, lo, hi, omega, lam, pen, pl, pl2, pen_p, pab, gap, zero, buf
 
 
 @njit(**JIT)
+def _weights(lam, pen, pen_p, omega, tau, wk, wp, D, S):
+    """The bound's weights over a contact-free span of tau [s]: wk[s, k] = |pen[s, k]|
+    min(|lam_k|^2 tau^2 / 8, 2), wp[s] = |pen_p[s]| omega^2 tau^2 / 8. A component
+    Re(a e^{lam s}) (|e^{lam s}| <= 1) departs from its chord over the span by at most
+    |a| min(|lam|^2 tau^2 / 8, 2), the particular solution's by |pen_p| omega^2 tau^2 / 8."""
+    q = 0.125 * tau * tau
+    for k in range(D):
+        m = min(abs(lam[k]) ** 2 * q, 2.0)
+        for s in range(S):
+            wk[s, k] = abs(pen[s, k]) * m
+    for s in range(S):
+        wp[s] = abs(pen_p[s]) * omega * omega * q
+
+
+@njit(**JIT)
+def _slack(s, z, wk, wp, D):
+    """The most the penetration of surface s can rise above the chord between a span's
+    ends, along the contact-free flow from z at the span's start (weights of _weights)."""
+    acc = wp[s]
+    for k in range(D):
+        acc += wk[s, k] * abs(z[k])
+    return acc
+
+
+@njit(**JIT)
+def _inside(s, z, t0, tau, omega, lam, pen, pl, pen_p, gap, buf, D):
+    """Whether surface s penetrates (> 0) at tau [s] along the contact-free flow from z at
+    t0."""
+    _flow(lam, z, tau, buf, D)
+    d, r = _reach(s, buf, t0 + tau, omega, pen, pl, pen_p, gap, D)
+    return d > 0.0
+
+
+@njit(**JIT)
+def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, pl2, pen_p,
+            pab, gap, ch, zero, buf, work, stack, D, S):
+    """The first entry of surface s into contact (penetration and clip both > 0) inside a
+    contact-free step of tau [s] from z at t0 that the step's ends do not show: a rod
+    ringing faster than the grid can touch and leave within one step.
+
+    The step is halved where the bound on the penetration (the larger end value plus
+    _weights' excursion over the piece) does not rule out a touch, down to pieces of
+    1 / PIECES of a cycle of the fastest component, where the step's own rules apply:
+    contact at a piece's end, or a rise and fall whose maximum (_peak) is above zero.
+    Pieces are visited in time order; from the one that reaches ``limit`` [s] on they are
+    left (a touch the step's rules found there stands). Returns (tau of the entry [s],
+    kind), tau = -1 for none. ``work`` (2, D), ``stack`` (DEPTH, 8): room."""
+    fast = 0.0
+    for k in range(D):
+        work[0, k] = abs(pen[s, k] * z[k])
+        work[1, k] = abs(lam[k]) ** 2
+        if work[0, k] > 0.0:
+            fast = max(fast, abs(lam[k]))
+    ppart = abs(pen_p[s]) * omega * omega
+    leaf = 2.0 * math.pi / (PIECES * fast) if fast > 0.0 else tau
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0.0, d0, r0, c0
+    stack[0, 4], stack[0, 5], stack[0, 6], stack[0, 7] = tau, d1, r1, c1
+    n = 1
+    while n > 0:
+        n -= 1
+        a, da, ra, ca = stack[n, 0], stack[n, 1], stack[n, 2], stack[n, 3]
+        b, db, rb, cb = stack[n, 4], stack[n, 5], stack[n, 6], stack[n, 7]
+        if a >= limit:
+            return -1.0, TOUCH
+        q = 0.125 * (b - a) * (b - a)
+        bound = max(da, db) + ppart * q
+        for k in range(D):
+            bound += work[0, k] * min(work[1, k] * q, 2.0)
+        if bound <= 0.0:
+            continue
+        if b - a <= leaf or n + 2 > stack.shape[0]:
+            if b >= limit:
+                return -1.0, TOUCH
+            if db > 0.0 and cb > 0.0:
+                if da <= 0.0:
+                    return _locate(TOUCH, s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p,
+                                   pab, gap, ch, zero, buf, D, S), TOUCH
+                tc = _locate(CLIP, s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p, pab, gap,
+                             ch, zero, buf, D, S)
+                if _inside(s, z, t0, tc, omega, lam, pen, pl, pen_p, gap, buf, D):
+                    return tc, CLIP
+                # out and back in between: the touch after the clip's crossing
+                return _locate(TOUCH, s, z, t0, tc, b, omega, lam, pen, pl, pl2, pen_p, pab,
+                               gap, ch, zero, buf, D, S), TOUCH
+            if da <= 0.0 and db <= 0.0 and ra > 0.0 and rb < 0.0:
+                tm, dm = _peak(s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p, pab, gap,
+                               zero, buf, D, S)
+                if dm > 0.0:
+                    return _locate(TOUCH, s, z, t0, a, tm, omega, lam, pen, pl, pl2, pen_p,
+                                   pab, gap, ch, zero, buf, D, S), TOUCH
+            continue
+        m = 0.5 * (a + b)
+        _flow(lam, z, m, buf, D)
+        dm, rm = _reach(s, buf, t0 + m, omega, pen, pl, pen_p, gap, D)
+        cm = hertz.clip(rm, ch[s])
+        stack[n, 0], stack[n, 1], stack[n, 2], stack[n, 3] = m, dm, rm, cm
+        stack[n, 4], stack[n, 5], stack[n, 6], stack[n, 7] = b, db, rb, cb
+        stack[n + 1, 0], stack[n + 1, 1], stack[n + 1, 2], stack[n + 1, 3] = a, da, ra, ca
+        stack[n + 1, 4], stack[n + 1, 5], stack[n + 1, 6], stack[n + 1, 7] = m, dm, rm, cm
+        n += 2
+    return -1.0, TOUCH
+
+
+@njit(**JIT)
 def _lawson(z, t, tau, e1, eh, out, omega, pen, pl, pen_p, inp, gap, kh, ch, F, w2, w3, w4,
             stages, D, S):
     """One integrating-factor RK4 step of length tau [s] from z at t into out (e1, eh:
@@ -307,6 +416,13 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                   np.empty(D, np.complex128))
     e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
     stages = np.empty((3, S))
+    # the bound on a surface's rise above its chord over a grid step, taken once per
+    # contact-free stretch (|z_k| only decays along it): where it cannot rule out a touch,
+    # the step is searched in pieces (_hidden)
+    wk, wp, slack = np.empty((S, D)), np.empty(S), np.empty(S)
+    _weights(lam, pen, pen_p, omega, h, wk, wp, D, S)
+    fresh = True
+    work, stack = np.empty((2, D)), np.empty((DEPTH, 8))
     sub1 = np.empty((GRADES + 1, D), np.complex128)
     subh = np.empty((GRADES + 1, D), np.complex128)
     for g in range(GRADES + 1):
@@ -336,6 +452,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         zn[k] = grid[k] * z[k]
                 else:
                     _flow(lam, z, tau, zn, D)
+                if fresh:
+                    for s in range(S):
+                        slack[s] = _slack(s, z, wk, wp, D)
+                    fresh = False
                 best, bkind, bs = tau, 0, -1
                 for s in range(S):
                     d0, r0 = _reach(s, z, t, omega, pen, pl, pen_p, gap, D)
@@ -345,20 +465,33 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         d0 = min(d0, 0.0)
                     elif override == CLIP:
                         c0 = min(c0, 0.0)
+                    mine = math.inf  # this surface's touch by the step's ends
                     if d1 > 0.0 and c1 > 0.0:
                         kind = TOUCH if d0 <= 0.0 else CLIP
                         found = _locate(kind, s, z, t, 0.0, tau, omega, lam, pen, pl, pl2,
                                         pen_p, pab, gap, ch, zero, buf, D, S)
-                        if found < best or bs < 0:
-                            best, bkind, bs = found, kind, s
+                        # the clip's crossing counts where the surface still penetrates:
+                        # fast ringing can take it out and back within the step
+                        if kind == TOUCH or _inside(s, z, t, found, omega, lam, pen, pl, pen_p,
+                                                    gap, buf, D):
+                            mine = found
+                            if found < best or bs < 0:
+                                best, bkind, bs = found, kind, s
                     elif d0 <= 0.0 and d1 <= 0.0 and r0 > 0.0 and r1 < 0.0:
                         tm, dm = _peak(s, z, t, 0.0, tau, omega, lam, pen, pl, pl2, pen_p, pab,
                                        gap, zero, buf, D, S)
                         if dm > 0.0:
                             found = _locate(TOUCH, s, z, t, 0.0, tm, omega, lam, pen, pl,
                                             pl2, pen_p, pab, gap, ch, zero, buf, D, S)
+                            mine = found
                             if found < best or bs < 0:
                                 best, bkind, bs = found, TOUCH, s
+                    if max(d0, d1) + slack[s] > 0.0:  # a touch the ends may not show
+                        found, kind = _hidden(s, z, t, tau, mine, d0, r0, c0, d1, r1, c1,
+                                              omega, lam, pen, pl, pl2, pen_p, pab, gap, ch,
+                                              zero, buf, work, stack, D, S)
+                        if found >= 0.0 and (found < best or bs < 0):
+                            best, bkind, bs = found, kind, s
                 override = -1
                 if bs >= 0:
                     _flow(lam, z, best, zn, D)
@@ -366,6 +499,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     t += best
                     on_grid = False
                     mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
+                    fresh = True
                     if book and bkind == TOUCH:
                         d, r, a = _surface(bs, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
                                            D, S)
