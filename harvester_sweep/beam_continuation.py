@@ -43,6 +43,15 @@ CORRECTOR = 8
 MAX_CORRECTION = 0.3
 #: Converged where the scaled residual is below this [-].
 TOLERANCE = 1e-9
+#: Central differences' step where a period doubling or Neimark-Sacker point is located
+#: (its test reads the multipliers), relative to each component's scale and to the range
+#: in the parameter [-]: the period map is smooth only up to its discretization (a state
+#: moved by a rounding error can change where a contact sub-step falls), and at 1e-6 the
+#: map's own jumps came into the monodromy, moving a doubling's location by 1e-7 of its
+#: value from one step choice to the next. A fold or grazing (read from the tangent, near
+#: the Hertz law's singular curvature at first touch) keeps PERTURBATION: at 1e-4 the
+#: differences' truncation moved a fold beside a grazing by what changed its outputs 1e-5.
+MULTIPLIER_PERTURBATION = 1e-4
 #: Bisection locates a bifurcation to this width of scaled arclength [-] (so to this
 #: fraction of the branch's range in the parameter, or better): at a fold the parameter
 #: hardly changes along the branch but the orbit does, and its outputs are wanted to
@@ -54,6 +63,11 @@ LOCATE = 1e-10
 RELOCATE_WIDTH = 1e-5
 RELOCATE_GROWTH = 8.0
 RELOCATE_TRIES = 5
+#: Orbits of at most this many forcing periods are followed past a period doubling [-].
+MAX_PERIODS = 8
+#: An orbit of 2p periods that comes back to within this of the scales after p periods is
+#: the orbit of p periods it doubles [-].
+SAME = 1e-6
 #: The outputs each branch point reports.
 BRANCH_OUTPUTS = ("power", "v_peak", "x_max", "x_min", "root_strain_max",
                   "impacts_per_period", "contact_force_max")
@@ -66,9 +80,11 @@ class _Map:
     located: its test functions read them."""
 
     def __init__(self, p: dict, parameter: str, span: float, steps: int, substep: float,
-                 central: bool = False):
+                 central: bool = False, periods: int = 1, perturbation: float = PERTURBATION):
         self.p, self.parameter, self.span = p, parameter, span
         self.steps, self.substep, self.central = steps, substep, central
+        self.perturbation = perturbation
+        self.periods = periods
         self.scale = system_of(p).scale
         self.D = len(self.scale)
 
@@ -77,29 +93,39 @@ class _Map:
                                                 self.parameter: value})
 
     def packs(self, values):
-        return [pack_beam(q, system_of(q), self.steps, self.substep)
-                for q in (self.point(v) for v in values)]
+        try:
+            points = [self.point(v) for v in values]
+        except ParameterError as error:  # (a corrector iterate beyond the parameter's range)
+            raise ArithmeticError(str(error)) from None
+        return [pack_beam(q, system_of(q), self.steps, self.substep) for q in points]
 
     def finer(self) -> _Map:
         """The same map at twice the grid steps and half the contact sub-step."""
         return _Map(self.p, self.parameter, self.span, 2 * self.steps, self.substep / 2,
-                    self.central)
+                    self.central, self.periods, self.perturbation)
 
-    def precise(self) -> _Map:
-        """The same map with central differences."""
-        return _Map(self.p, self.parameter, self.span, self.steps, self.substep, True)
+    def precise(self, test) -> _Map:
+        """The same map with central differences, their step chosen for ``test``."""
+        h = MULTIPLIER_PERTURBATION if test in (_doubling, _torus) else PERTURBATION
+        return _Map(self.p, self.parameter, self.span, self.steps, self.substep, True,
+                    self.periods, h)
+
+    def doubled(self) -> _Map:
+        """The map of twice the periods (the orbits born at a period doubling)."""
+        return _Map(self.p, self.parameter, self.span, self.steps, self.substep, self.central,
+                    2 * self.periods, self.perturbation)
 
     def residual_and_jacobian(self, u):
         """F(u) = (P(y) - y) / scale and dF/du (D, D + 1) at u = (y / scale, lambda / span)."""
         D, scale = self.D, self.scale
         y, lam = u[:D] * scale, u[D] * self.span
-        h = PERTURBATION
+        h = self.perturbation
         sides = (1.0, -1.0) if self.central else (1.0,)
         here, *moved = self.packs([lam] + [lam + side * h * self.span for side in sides])
-        monodromy, image, ok = modal_map.monodromies([here], y[None], [1], (h * scale)[None],
-                                                     central=self.central)
+        monodromy, image, ok = modal_map.monodromies([here], y[None], [self.periods],
+                                                     (h * scale)[None], central=self.central)
         shifted, ok_moved = modal_map.map_states(moved, np.repeat(y[None], len(moved), 0),
-                                                 np.ones(len(moved), dtype=np.int64))
+                                                 np.full(len(moved), self.periods))
         if not (ok.all() and ok_moved.all()):
             raise FloatingPointError("the period map diverged")
         jac = np.empty((D, D + 1))
@@ -109,15 +135,28 @@ class _Map:
         return (image[0] - y) / scale, jac
 
     def outputs(self, u) -> dict:
+        """The outputs of the orbit through u, measured over its periods from u (an
+        unstable orbit is left within a few periods: the engine's settle test, which would
+        run on to the attractor, is not waited for)."""
         y, lam = u[:self.D] * self.scale, u[self.D] * self.span
         q = self.point(lam)
-        # one period from the fixed point, then the orbit measured over the next: an
-        # unstable orbit is left within a few periods, so the engine's settle test (which
-        # would run on to the attractor) is not waited for
-        pk = pack_beam(dict(q, max_periods=1), system_of(q), self.steps, self.substep)
-        m, _, _ = modal_map.run([pk], [y])
+        pk = pack_beam(q, system_of(q), self.steps, self.substep)
+        m = modal_map.measure([pk], [y], [self.periods])
         table, _ = point_outputs(q, system_of(q), m[0])
         return table
+
+    def half_offset(self, u, v) -> float:
+        """How far the orbit through u (of an even number of periods) is from coming back
+        to itself after half its periods, along ``v`` (scaled): the doubled orbit's
+        distance, signed, from the orbit it doubles. It changes sign where the branch of
+        doubled orbits passes through that orbit (onto the same orbit shifted by half its
+        periods)."""
+        y = u[:self.D] * self.scale
+        half, ok = modal_map.map_states(self.packs([u[self.D] * self.span]), y[None],
+                                        [self.periods // 2])
+        if not ok[0]:
+            raise FloatingPointError("the period map diverged")
+        return float(v @ ((half[0] - y) / self.scale))
 
 
 def _overrides(p: dict) -> dict:
@@ -150,12 +189,19 @@ def check_branch(parameter: str, start: float, stop: float, step: float,
 
 def continue_beam_branch(parameter: str, start: float, stop: float,
                          preset: str | None = DEFAULT_BEAM_PRESET, *, step: float = 0.01,
-                         max_points: int = 400, **overrides) -> xr.Dataset:
+                         max_points: int = 400, period_doubling: str = "mark",
+                         **overrides) -> xr.Dataset:
     """The branch of periodic orbits (period one forcing period) of a beam point from
     ``parameter`` = ``start`` towards ``stop`` (SI units), through folds, by
     pseudo-arclength steps of ``step`` (in units of the range, halved where the corrector
-    fails, up to twice that after easy steps). Returns a CF dataset over ``point``."""
+    fails, up to twice that after easy steps). ``period_doubling``: "mark" locates the
+    doublings, "switch" also follows each doubled branch (orbits of twice the periods, up
+    to MAX_PERIODS) within the range. Returns a CF dataset over ``point``, the branches
+    one after another (``branch``, ``orbit_period``)."""
     check_branch(parameter, start, stop, step, max_points)
+    if period_doubling not in ("mark", "switch"):
+        raise ParameterError(f"period_doubling [-] = {period_doubling!r}: must be 'mark' or "
+                             "'switch'")
     p = resolve_beam_parameters(preset, **overrides, **{parameter: start})
     first = solve_beam([p])
     if first.values["status"][0] != 0 or first.values["orbit_period"][0] != 1:
@@ -164,18 +210,47 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
     span = float(stop - start)
     f = _Map(p, parameter, abs(span), int(first.values["steps_per_period"][0]),
              float(first.values["contact_step"][0]))
-    direction = math.copysign(1.0, span)
     u = np.append(first.ends[0] / f.scale, start / f.span)
     u, jac = _correct(f, u, None, None)
     t = _tangent(jac)
-    if t[-1] * direction < 0:
+    if t[-1] * span < 0:
         t = -t
-    points = [(u, jac, t, "none")]
+    bounds = sorted((start / f.span, stop / f.span))
+    branches = [(f, _follow(f, (u, jac, t, "none"), bounds, step, max_points)[0])]
+    if period_doubling == "switch":
+        met = set()  # (branch, point) of the doublings a doubled branch has ended at
+        for b, (g, points) in enumerate(branches):  # (grows as doubled branches are found)
+            doublings = [k for k, point in enumerate(points) if point[3] == "period_doubling"]
+            for k in doublings if g.periods * 2 <= MAX_PERIODS else ():
+                left = max_points - sum(len(part) for _, part in branches)
+                start_v = None if (b, k) in met or left < 2 else _doubled_start(
+                    g.doubled(), points[k][0], points[k][1], step)
+                if start_v is None:
+                    continue
+                part, ended = _follow(g.doubled(), start_v[0], bounds, step, left,
+                                      start_v[1])
+                branches.append((g.doubled(), part))
+                if ended:  # (at the doubling nearest its end: not followed again from there)
+                    end = part[-1][0][-1]
+                    met.add((b, min(doublings, key=lambda j: abs(points[j][0][-1] - end))))
+    return _dataset(f, [[_accurate(g, *point, p["accuracy"]) for point in points]
+                        for g, points in branches], parameter, preset)
+
+
+def _follow(f: _Map, first, bounds, step: float, max_points: int, doubling=None) -> list:
+    """A branch of f's fixed points from ``first`` (point, Jacobian, tangent, kind) until
+    the parameter leaves ``bounds`` (scaled), the step fails below 1e-4 of ``step``, or
+    ``max_points``; each bifurcation between two points located and put between them. A
+    branch of doubled orbits (``doubling``: the doubling direction, scaled) ends where it
+    meets the orbit it doubles (:meth:`_Map.half_offset` changes sign): beyond it, it
+    would follow the same orbits again, shifted by half their periods. Returns (the
+    points, whether it ended so)."""
+    points = [first]
+    side = None if doubling is None else np.sign(f.half_offset(first[0], doubling))
     ds_step = step
     while len(points) < max_points:
-        u0, _, t0, _ = points[-1]
-        lam = u0[-1] * f.span
-        if (lam - stop) * direction >= 0:
+        u0, jac0, t0, _ = points[-1]
+        if len(points) > 1 and not bounds[0] < u0[-1] < bounds[1]:
             break
         guess = u0 + ds_step * t0
         try:
@@ -185,18 +260,42 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
             if ds_step < step * 1e-4:
                 break
             continue
+        if side is not None and np.sign(f.half_offset(u1, doubling)) != side:
+            return points, True
         t1 = _tangent(jac1, t0)
         found = []  # each bifurcation between the two points, located and marked there
         for test in _TESTS:
-            if test(f, u0, points[-1][1], t0) * test(f, u1, jac1, t1) < 0:
-                where, located = _locate(f.precise(), u0, t0, ds_step, test)
+            if test(f, u0, jac0, t0) * test(f, u1, jac1, t1) < 0:
+                where, located = _locate(f.precise(test), u0, t0, ds_step, test)
                 if located is not None:
                     found.append((where, located + (_KINDS[test],)))
         points.extend(point for _, point in sorted(found, key=lambda item: item[0]))
         points.append((u1, jac1, t1, "none"))
         ds_step = min(ds_step * 1.5, 2 * step)
-    return _dataset(f, [_accurate(f, *point, p["accuracy"]) for point in points], parameter,
-                    preset)
+    return points, False
+
+
+def _doubled_start(f: _Map, u, jac, step: float):
+    """The first point of the doubled branch (on ``f``, twice the periods) born at the
+    period doubling ``u`` (Jacobian ``jac`` of the map it doubles), and the doubling
+    direction: the located point moved along the eigenvector of the multiplier nearest
+    -1, corrected with that direction as its tangent. None where the correction fails or
+    comes back to the orbit it doubles."""
+    D = f.D
+    mult, vectors = np.linalg.eig(jac[:, :D] + np.eye(D))
+    v = vectors[:, np.argmin(np.abs(mult + 1))].real
+    v /= np.linalg.norm(v)
+    t = np.append(v, 0.0)
+    for ds in (step, step / 4, step / 16):
+        guess = u + ds * t
+        try:
+            u1, jac1 = _correct(f, guess, t, guess)
+            offset = f.half_offset(u1, v)
+        except (ArithmeticError, np.linalg.LinAlgError):
+            continue
+        if abs(offset) > SAME:
+            return (u1, jac1, _tangent(jac1, t), "none"), v
+    return None
 
 
 def _fold(f, u, jac, t) -> float:
@@ -302,7 +401,7 @@ def _accurate(f: _Map, u, jac, t, kind: str, accuracy: float) -> dict:
     for level in range(MAX_LEVELS):
         g = f.finer()
         if test is not None:
-            fine = _relocated(g.precise(), u, t, test)
+            fine = _relocated(g.precise(test), u, t, test)
             if fine is None:
                 break
             u2, jac2, t2 = fine
@@ -336,7 +435,8 @@ def _accurate(f: _Map, u, jac, t, kind: str, accuracy: float) -> dict:
         f, u, jac, t, out = g, u2, jac2, t2, out2
         shift, mult_shift, estimate = math.nan, None, math.nan
     return {"value": u[f.D] * f.span, "outputs": out, "estimate": estimate,
-            "steps": f.steps, "substep": f.substep, "monodromy": jac[:, :f.D] + np.eye(f.D),
+            "steps": f.steps, "substep": f.substep, "periods": f.periods,
+            "monodromy": jac[:, :f.D] + np.eye(f.D),
             "kind": kind, "shift": shift, "multiplier_shift": mult_shift}
 
 
@@ -371,8 +471,10 @@ def _multiplier_shift(coarse, fine, D: int) -> np.ndarray:
     return np.abs(mu[:, None] - other[None, :]).min(axis=1)
 
 
-def _dataset(f: _Map, points: list, parameter: str, preset) -> xr.Dataset:
-    """The branch's CF dataset over ``point`` from the points of :func:`_accurate`."""
+def _dataset(f: _Map, branches: list, parameter: str, preset) -> xr.Dataset:
+    """The CF dataset over ``point`` of ``branches`` (each a list of the points of
+    :func:`_accurate`), one after another."""
+    points = [dict(pt, branch=b) for b, part in enumerate(branches) for pt in part]
     D, n = f.D, len(points)
     mult = sorted_multipliers(np.array([pt["monodromy"] for pt in points]))
     rho = np.abs(mult[:, 0])
@@ -397,6 +499,9 @@ def _dataset(f: _Map, points: list, parameter: str, preset) -> xr.Dataset:
             "stable": (("point",), (rho < 1).astype("i1"), OUTPUTS["stable"].attrs),
             "bifurcation": (("point",), flags, {**OUTPUTS["bifurcation"].attrs,
                                                 **BIFURCATION_FLAGS}),
+            "branch": (("point",), column("branch").astype("i4"), OUTPUTS["branch"].attrs),
+            "orbit_period": (("point",), column("periods").astype("i4"),
+                             OUTPUTS["orbit_period"].attrs),
             "error_estimate": (("point",), column("estimate"), {
                 **OUTPUTS["error_estimate"].attrs,
                 "comment": "the change of power, v_peak, x_max, x_min and root_strain_max "

@@ -127,6 +127,10 @@ def _parser() -> argparse.ArgumentParser:
                              help="arclength step in units of the range (default 0.01)")
     beam_branch.add_argument("--max-points", type=int, default=400, dest="max_points",
                              help="points at most (default 400)")
+    beam_branch.add_argument("--period-doubling", choices=("mark", "switch"), default="mark",
+                             dest="period_doubling",
+                             help="at a period doubling: mark it (default), or also follow "
+                             "the branch of doubled orbits (up to 8 forcing periods)")
     beam_branch.add_argument("--output", "--out", dest="output", required=True,
                              metavar="OUT.nc", help="netCDF file to write")
 
@@ -899,9 +903,12 @@ def _beam_branch_or_basins(args) -> int:
     _announce_beam_compilation()
     if args.command == "beam-continue":
         ds = continue_beam_branch(args.parameter, args.start, args.stop, preset,
-                                  step=args.step, max_points=args.max_points, **overrides)
+                                  step=args.step, max_points=args.max_points,
+                                  period_doubling=args.period_doubling, **overrides)
         found = int((ds["bifurcation"] > 0).sum())
-        what = f"{ds.sizes['point']} branch points, {found} bifurcation(s) located"
+        branches = int(ds["branch"].max()) + 1
+        what = (f"{ds.sizes['point']} branch points ({branches} branch"
+                f"{'es' if branches > 1 else ''}), {found} bifurcation(s) located")
     else:
         ds = beam_basins(preset, samples=args.samples, seed=args.seed, box=args.box,
                          **overrides)

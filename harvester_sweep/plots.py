@@ -853,21 +853,33 @@ def plot_beam_sweep(ds, path=None) -> Figure:
 
 def plot_beam_branch(ds, path=None) -> Figure:
     """A beam branch (``beam_continuation.continue_beam_branch``): power and tip x_max
-    [um] against the parameter, stable parts solid and unstable dashed, each located
-    bifurcation marked and labelled with its value."""
+    [um] against the parameter, each branch its own line (a colour per orbit period),
+    stable parts solid and unstable dashed, each located bifurcation marked and labelled
+    with its value."""
     parameter = ds.attrs["parameter"]
     x = ds[parameter].values
     x_scale, x_shown = _display(_unit(ds, parameter), x)
     fig = _new_figure((7.5, 6.5))
     panels = fig.subplots(2, 1, sharex=True)
     stable = ds["stable"].values.astype(bool)
+    branch = ds["branch"].values if "branch" in ds else np.zeros(len(x), dtype=int)
+    period = ds["orbit_period"].values if "orbit_period" in ds else np.ones(len(x), dtype=int)
     names = list(BIFURCATIONS)
     for ax, (name, unit) in zip(panels, (("power", "W"), ("x_max", "m"))):
         y = ds[name].values
         scale, shown = (1e-6, "\u00b5m") if unit == "m" else _display(unit, y)
-        for part, style in ((stable, "-"), (~stable, "--")):
-            ax.plot(x / x_scale, np.where(part, y, np.nan) / scale, "C0" + style, lw=1.2,
-                    label="stable" if style == "-" else "unstable")
+        labelled = set()
+        for b in np.unique(branch):  # (each branch its own line, a colour per period)
+            on = branch == b
+            periods = int(period[on][0])
+            colour = f"C{int(np.log2(max(periods, 1)))}"
+            for part, style in ((stable, "-"), (~stable, "--")):
+                label = "stable" if style == "-" else "unstable"
+                if len(np.unique(period)) > 1:
+                    label += f", {periods} period{'s' if periods > 1 else ''}"
+                ax.plot(x[on] / x_scale, np.where(part, y, np.nan)[on] / scale,
+                        colour + style, lw=1.2, label=None if label in labelled else label)
+                labelled.add(label)
         for i in np.flatnonzero(ds["bifurcation"].values):
             kind = names[int(ds["bifurcation"].values[i])]
             ax.plot(x[i] / x_scale, y[i] / scale, ls="none", **_BIFURCATION_MARKS[kind])

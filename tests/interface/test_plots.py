@@ -295,3 +295,35 @@ def test_down_dots_lie_under_the_up_dots_of_a_bifurcation_diagram():
     assert up.get_zorder() > down.get_zorder()
     assert up.get_markersize() < down.get_markersize() and down.get_markerfacecolor() == "none"
     assert fig.axes[-2].get_ylabel() == f"displacement y(nT) [{UM}]"
+
+
+def test_a_beam_branch_draws_each_branch_apart_in_the_colour_of_its_period():
+    """Two branches, of one period and of two, that overlap in frequency: each is its own
+    line (none joins the last point of one to the first of the next), the legend names
+    each period, and each located bifurcation is labelled with its value."""
+    import xarray as xr
+
+    from harvester_sweep.outputs import BIFURCATIONS
+    from harvester_sweep.plots import plot_beam_branch
+
+    f = np.r_[np.linspace(140, 165, 30), np.linspace(148.6, 159.3, 20)]
+    branch = np.r_[np.zeros(30, int), np.ones(20, int)]
+    period = np.where(branch == 0, 1, 2)
+    flags = np.zeros(50, int)
+    flags[[8, 21]] = list(BIFURCATIONS).index("period_doubling")
+    ds = xr.Dataset({"frequency": ("point", f, {"units": "Hz"}),
+                     "power": ("point", 1e-8 * (1 + 0.1 * branch + 0.01 * np.sin(f)),
+                               {"units": "W"}),
+                     "x_max": ("point", 1e-6 * (1 + 0.2 * branch), {"units": "m"}),
+                     "stable": ("point", np.ones(50, int)), "bifurcation": ("point", flags),
+                     "branch": ("point", branch), "orbit_period": ("point", period)},
+                    attrs={"parameter": "frequency", "preset": "bimorph_tip"})
+    fig = plot_beam_branch(ds)
+    ax = fig.axes[0]
+    drawn = [line for line in ax.get_lines() if np.isfinite(line.get_ydata()).sum() > 1]
+    assert len(drawn) == 2  # (the stable part of each branch)
+    assert {len(line.get_xdata()) for line in drawn} == {30, 20}
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "stable, 1 period" in labels and "stable, 2 periods" in labels
+    notes = [t.get_text() for t in ax.texts]
+    assert any(f"{f[8]:.6g}" in n for n in notes) and any(f"{f[21]:.6g}" in n for n in notes)

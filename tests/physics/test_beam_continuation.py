@@ -87,3 +87,45 @@ def test_bad_branch_options_are_refused(kwargs, words):
     with pytest.raises(ParameterError, match=words):
         continue_beam_branch(options.pop("parameter"), options.pop("start"),
                              options.pop("stop"), "bimorph_tip", n_modes=1, **options)
+
+
+def test_a_period_doubling_switches_to_the_tip_mass_models_doubled_orbits():
+    """The one-mode beam at its tip 0.5 um from the stop doubles its period at two
+    frequencies; switched there, the branch of doubled orbits born at one ends at the
+    other (followed once), and its orbits are the lane engine's of the reduced tip-mass
+    model: both doublings within twice the two engines' shifts of the lane engine's, the
+    doubled orbits' outputs within twice their estimates of its orbits at 1e-10."""
+    beam = continue_beam_branch("frequency", 140.0, 165.0, "bimorph_tip", n_modes=1,
+                                gap=0.5e-6, step=0.02, period_doubling="switch")
+    p = resolve_beam_parameters("bimorph_tip", n_modes=1, gap=0.5e-6)
+    reduced = dict(bm.as_tip_mass_parameters(bimorph(p)), gap=0.5e-6)
+    tip = continue_branch("paper", "frequency", 140.0, 165.0, **reduced)
+    tip = tip.dataset if hasattr(tip, "dataset") else tip
+    assert sorted(set(beam["branch"].values)) == [0, 1]
+    first = beam.where(beam["branch"] == 0, drop=True)
+    found = _located(first)
+    assert [kind for kind, _ in found] == [kind for kind, _ in _located(tip)] \
+        == ["period_doubling", "period_doubling"]
+    flagged = first["bifurcation"].values > 0
+    pairs = zip(sorted(zip(first["frequency"].values[flagged],
+                           first["frequency_shift"].values[flagged])),
+                sorted(zip(tip["frequency"].values[tip["bifurcation"].values > 0],
+                           tip["frequency_shift"].values[tip["bifurcation"].values > 0])))
+    for (f_beam, s_beam), (f_tip, s_tip) in pairs:
+        assert abs(f_beam - f_tip) <= 2 * (abs(s_beam) + abs(s_tip))
+    doubled = beam.where(beam["branch"] == 1, drop=True)
+    assert set(doubled["orbit_period"].values.astype(int)) == {2}
+    births = sorted(f for _, f in found)
+    assert doubled["frequency"].min() == pytest.approx(births[0], abs=0.5)
+    assert doubled["frequency"].max() == pytest.approx(births[1], abs=0.5)
+    stable = np.flatnonzero(doubled["stable"].values == 1)
+    assert len(stable) > 10
+    for k in stable[len(stable) // 4::len(stable) // 4][:3]:
+        f = float(doubled["frequency"][k])
+        m = run_scene("paper", **reduced, frequency=f, accuracy=1e-10).metrics
+        assert m["orbit_period"] == 2
+        estimate = float(doubled["error_estimate"][k])
+        reach = max(abs(m["x_max"]), abs(m["x_min"]))
+        for name, size in (("power", m["power"]), ("v_peak", m["v_peak"]),
+                           ("x_max", reach)):
+            assert abs(float(doubled[name][k]) - m[name]) <= 2 * estimate * size
