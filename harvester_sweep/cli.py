@@ -356,7 +356,10 @@ def _run(args) -> int:
     from .sweep_file import load_sweep
 
     _check_output(args.output, (".nc",))
-    spec = load_sweep(args.sweep_file)  # bad input: one line, before anything else
+    # bad input: one line, before anything else (a beam file runs as beam-sweep runs it)
+    spec = load_sweep(args.sweep_file, model=None)
+    if spec.model == "beam":
+        return _run_beam_spec(spec, args)
     _note_derived_stiffness(spec.preset, spec.fixed, spec.grid)
     if not args.quiet:
         _announce_compilation()
@@ -920,13 +923,20 @@ def _beam_branch_or_basins(args) -> int:
 
 
 def _beam_sweep(args) -> int:
-    from .beam_cluster import check_cluster, run_beam_file
-    from .outputs import STATUSES
     from .sweep_file import load_sweep
 
     _check_output(args.output, (".nc",))
     # (checked once, before anything else: bad input is one line, exit 2)
     spec = load_sweep(_beam_sweep_source(args), model="beam")
+    return _run_beam_spec(spec, args)
+
+
+def _run_beam_spec(spec, args) -> int:
+    """A checked beam sweep run as ``args`` (of beam-sweep or run) say: its chunks kept in
+    OUT.nc.partial/ as they finish, a summary of its statuses on stderr."""
+    from .beam_cluster import check_cluster, run_beam_file
+    from .outputs import STATUSES
+
     check_cluster(args.workers, args.scheduler)
     _announce_beam_compilation()
     start = time.perf_counter()

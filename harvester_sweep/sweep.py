@@ -14,7 +14,7 @@ import sys
 
 from tqdm import tqdm
 
-from .chunk_store import ChunkStore, MemoryStore, StoreError, write_failure
+from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import chunk_points, compute_chunk
 from .parameters import ParameterError, is_number, value_text
 from .run_estimate import announce, estimate
@@ -28,7 +28,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     Parameters
     ----------
     sweep : str, pathlib.Path, dict or SweepSpec
-        A TOML sweep file or a dict of the same shape (see :mod:`harvester_sweep.sweep_file`).
+        A TOML sweep file or a dict of the same shape (see :mod:`harvester_sweep.sweep_file`);
+        a sweep of the beam (``model = "beam"``) is run by beam_cluster.run_beam_file.
     output : str or pathlib.Path, optional
         netCDF file to write. Finished chunks are kept in ``<output>.partial/`` until the
         file is complete.
@@ -65,7 +66,12 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         (a ParameterError) When dask cannot finish the chunks (workers that keep dying,
         none left); the finished chunks are kept for ``resume``.
     """
-    spec = load_sweep(sweep)
+    spec = load_sweep(sweep, model=None)
+    if spec.model == "beam":
+        from .beam_cluster import run_beam_file
+
+        return run_beam_file(spec, output, resume=resume, workers=workers,
+                             scheduler=scheduler, announce=progress)
     if output is not None and not str(output).lower().endswith(".nc"):
         raise ParameterError(f"output = {str(output)!r}: the file name must end in .nc (the "
                              "file is netCDF)")
@@ -101,18 +107,13 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
                     run_on_dask(spec, chunks, store, bar, workers, scheduler)
 
             compute(todo)
-            results = [_load(store, chunk, compute) for chunk in range(spec.n_chunks)]
+            results = [load_computed(store, chunk, compute) for chunk in range(spec.n_chunks)]
         # (imported here: the command line starts faster without xarray)
-        from .datasets import sweep_dataset, write_netcdf
+        from .datasets import sweep_dataset
 
         ds = sweep_dataset(spec, results)
         if output is not None:
-            try:
-                write_netcdf(ds, output)
-            except OSError as error:
-                raise store.unwritten(output, write_failure(output, error, ds.nbytes)) \
-                    from None
-            store.remove()
+            write_result(store, ds, output)
     return ds
 
 
@@ -128,15 +129,3 @@ def _threads(workers: int | None, scheduler: str | None) -> int:
     import numba
 
     return numba.get_num_threads()
-
-
-def _load(store, chunk: int, compute) -> dict:
-    """A finished chunk's arrays; one damaged since the run began is computed again, once."""
-    result = store.load(chunk)
-    if result is None:
-        compute([chunk])
-        result = store.load(chunk)
-        if result is None:
-            raise StoreError(f"chunk {chunk} fails its check right after it was written: "
-                             f"the disk under {store.dir} does not keep what is written to it")
-    return result

@@ -285,10 +285,11 @@ def _identity(values: np.ndarray):
             "sha256": hashlib.sha256(data.tobytes()).hexdigest()}
 
 
-def load_sweep(source, model: str = "tip_mass") -> SweepSpec:
+def load_sweep(source, model: str | None = "tip_mass") -> SweepSpec:
     """A checked :class:`SweepSpec` from a TOML file path or a dict of the same shape, of
     ``model``, the model the caller runs ("tip_mass" or "beam"): a sweep of the other one
-    is refused, saying which command runs it.
+    is refused, saying which command runs it. ``model`` None: the model the sweep names
+    (``model``, "tip_mass" where it names none).
 
     Raises
     ------
@@ -302,8 +303,9 @@ def load_sweep(source, model: str = "tip_mass") -> SweepSpec:
         _check_model(source.model, model)
         return source
     source = read_toml(source, "sweep", _TOP_KEYS)
-    _check_model(source.get("model", "tip_mass"), model)
-    beam = model == "beam"
+    named = source.get("model", "tip_mass")
+    _check_model(named, model)
+    beam = named == "beam"
     if beam:
         from .beam_parameters import BEAM_PARAMETERS as registry
         from .beam_parameters import DEFAULT_BEAM_PRESET as default_preset
@@ -372,13 +374,13 @@ def load_sweep(source, model: str = "tip_mass") -> SweepSpec:
     return spec
 
 
-def _check_model(named, model: str) -> None:
+def _check_model(named, model: str | None) -> None:
     """Refuse a sweep whose ``model`` is unknown or not ``model``, the one the caller runs
-    (one line saying which command runs it)."""
+    (None: any), in one line saying which command runs it."""
     if named not in MODELS:
         raise ParameterError(f"model = {value_text(named)}: must be one of "
                              + ", ".join(f'"{m}"' for m in MODELS))
-    if named != model:
+    if model is not None and named != model:
         command = ("harvester-sweep beam-sweep SWEEP.toml (beam_cluster.run_beam_file in "
                    "Python)" if named == "beam" else "harvester-sweep run SWEEP.toml "
                    "(run_sweep in Python)")

@@ -15,6 +15,7 @@ from harvester_sweep.beam_cluster import run_beam_file
 from harvester_sweep.beam_runs import beam_sweep
 from harvester_sweep.cluster import ClusterError
 from harvester_sweep.parameters import ParameterError
+from harvester_sweep.sweep import run_sweep
 from harvester_sweep.sweep_file import load_sweep
 from tests.helpers import assert_same_bits
 
@@ -286,10 +287,10 @@ def test_a_bad_beam_sweep_file_exits_2_in_one_line(text, words, tmp_path, capsys
     (["beam-sweep", "{beam}", "--set", "n_modes=2"], ["--set", "not both"]),
     (["beam-sweep"], ["give a sweep file", "--axis"]),
     (["beam-sweep", "{tip}"], ['model = "tip_mass"', "harvester-sweep run"]),
-    (["run", "{beam}"], ['model = "beam"', "harvester-sweep beam-sweep"]),
     (["beam-sweep", "{odd}"], ["model = 'beem'", '"tip_mass", "beam"']),
-], ids=["file_and_axis", "file_and_set", "nothing", "tip_mass_file", "beam_file_to_run",
-        "unknown_model"])
+    (["run", "{odd}"], ["model = 'beem'", '"tip_mass", "beam"']),
+], ids=["file_and_axis", "file_and_set", "nothing", "tip_mass_file", "unknown_model",
+        "unknown_model_to_run"])
 def test_a_sweep_file_given_to_the_wrong_command_exits_2_in_one_line(argv, words, tmp_path,
                                                                      capsys):
     files = {"beam": 'model = "beam"\n[grid]\nfrequency = [230.0]\n',
@@ -303,6 +304,21 @@ def test_a_sweep_file_given_to_the_wrong_command_exits_2_in_one_line(argv, words
     assert err.count("\n") == 1 and "Traceback" not in err, err
     for word in words:
         assert word in err, (word, err)
+
+
+def test_run_runs_a_beam_file_as_beam_sweep_does(tmp_path):
+    """`harvester-sweep run` takes a sweep file of either model: a beam file's dataset is
+    beam-sweep's, bit for bit, and run_sweep's in Python too."""
+    path = tmp_path / "s.toml"
+    path.write_text('model = "beam"\n[parameters]\nn_modes = 1\n[grid]\n'
+                    'frequency = [230.0, 240.0]\n')
+    by_run, by_beam = tmp_path / "run.nc", tmp_path / "beam.nc"
+    assert cli.main(["run", str(path), "--output", str(by_run), "--quiet"]) == 0
+    assert cli.main(["beam-sweep", str(path), "--output", str(by_beam), "--quiet"]) == 0
+    with xr.open_dataset(by_run) as a, xr.open_dataset(by_beam) as b:
+        assert a.attrs["model"] == "beam"
+        xr.testing.assert_identical(a, b)
+        xr.testing.assert_identical(run_sweep(str(path), progress=False), b.load())
 
 
 def test_beam_sweep_reads_and_checks_its_file_once(tmp_path, monkeypatch):
