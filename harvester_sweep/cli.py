@@ -534,9 +534,9 @@ def _bifurcation_table(ds) -> str:
     if not rows:
         lines.append("  none located")
     lines.append(f"  (bracket: width of the interval in {name} that holds it; 2x steps: the "
-                 "change of its location when located again at twice its steps per period,")
-    lines.append("  its discretization error, nan where its location failed; steps: the "
-                 "steps per period it is located at)")
+                 "larger change of its location when located again at 3/2 and at twice")
+    lines.append("  its steps per period, its discretization error, nan where its location "
+                 "failed; steps: the steps per period it is located at)")
     return "\n".join(lines)
 
 

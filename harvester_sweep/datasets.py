@@ -228,20 +228,20 @@ def branch_dataset(branch, spec) -> xr.Dataset:
     shift = np.array([pt.shift for pt in points])
     data[f"{parameter}_shift"] = ("point", shift, {
         "units": PARAMETERS[parameter].unit,
-        "long_name": f"change of {parameter} when the point is solved again at twice its "
-                     "steps per period: at a located bifurcation, the change of its location "
-                     "(its discretization error); elsewhere, corrected normal to the branch",
-        "comment": "NaN where the correction or location at twice the steps did not "
-                   "converge"})
+        "long_name": f"change of {parameter} when the point is solved again at other steps "
+                     "per period: at a located bifurcation, the larger change of its location "
+                     "at 3/2 and at twice its steps (its discretization error); elsewhere, "
+                     "corrected normal to the branch at twice its steps",
+        "comment": "NaN where no correction or location at the other steps converged"})
     change = np.full(mult.shape, np.nan)
     for k, pt in enumerate(points):
         if pt.multiplier_shift is not None:
             change[k] = pt.multiplier_shift
     data["floquet_multipliers_shift"] = (("point", "multiplier"), change, {
         "units": "1",
-        "long_name": "change of each Floquet multiplier, |mu at twice the steps - mu|, when a "
-                     "located bifurcation is located again at twice its steps per period "
-                     "(its multipliers' discretization error)",
+        "long_name": "change of each Floquet multiplier, |mu at other steps - mu|, the larger "
+                     "when a located bifurcation is located again at 3/2 and at twice its "
+                     "steps per period (its multipliers' discretization error)",
         "comment": "NaN at points that are not located bifurcations"})
     data[f"{parameter}_precision"] = ("point", np.array([pt.precision for pt in points]), {
         "units": PARAMETERS[parameter].unit,
