@@ -255,12 +255,13 @@ def _follow(f: _Map, first, bounds, step: float, max_points: int, doubling=None)
         guess = u0 + ds_step * t0
         try:
             u1, jac1 = _correct(f, guess, t0, guess)
+            crossed = side is not None and np.sign(f.half_offset(u1, doubling)) != side
         except (ArithmeticError, np.linalg.LinAlgError):
             ds_step /= 2
             if ds_step < step * 1e-4:
                 break
             continue
-        if side is not None and np.sign(f.half_offset(u1, doubling)) != side:
+        if crossed:
             return points, True
         t1 = _tangent(jac1, t0)
         found = []  # each bifurcation between the two points, located and marked there
