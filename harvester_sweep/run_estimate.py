@@ -43,6 +43,7 @@ import numpy as np
 
 from . import period_map, timescales
 from ._engine import LANES, METRIC, PARAM, STATUS
+from ._engine.scheduler import SHORT_CALL
 from .orbits import solve_orbits
 from .packing import pack_points
 from .parameters import ParameterError
@@ -58,15 +59,13 @@ SEGMENT = 8
 #: budget: bounds the sample's cost (a point that settles within it costs what it did) [-].
 SAMPLE_STEPS = 1_000_000
 #: The cost of one point in a round, as a share of the round's own cost (its Python and the
-#: engine call): measured 16 us against 1.6 ms on the benchmark grid and the frequency
-#: response example (2-core Xeon, shared) [-].
+#: engine call): a ratio of two Python costs, which a machine's speed changes alike; fitted
+#: on the benchmark grids and the frequency response (benchmarks/results/estimate_44.md) [-].
 POINT_ROUND_SHARE = 0.01
 #: Timed runs of the engine's rate, the best taken [-].
 RATE_RUNS = 3
 #: RK4 steps of one timed run of the engine's rate (about 10 ms) [-].
 RATE_STEPS = 1_000_000
-#: Steps below which an engine call runs on one thread (_engine's scheduler.SHORT_CALL) [-].
-SHORT_CALL = 200_000
 
 
 @dataclass(frozen=True)
@@ -205,7 +204,8 @@ def _timed(points, remaining, lines, per_chunk, line_steps, line_rounds, chunk_r
     local = max(1, min(threads, numba.get_num_threads()))
     side_by_side = max(1, threads // local)  # chunks at once (Dask workers)
     chunks = math.ceil(lines / per_chunk)
-    # A call's steps: its lines' share of a round; short calls take one thread.
+    # A call's steps: its lines' share of a round; a short call (SHORT_CALL, the engine's
+    # own line) takes one thread.
     call_steps = per_chunk * line_steps / max(line_rounds, 1.0)
     call_threads = 1 if call_steps < SHORT_CALL else min(local, math.ceil(per_chunk / LANES))
     seconds = (chunks * chunk_rounds * sample.round_seconds
