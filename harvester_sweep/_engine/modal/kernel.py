@@ -9,13 +9,16 @@ modes' frequencies, so the fifth bending mode and the rod's modes (tens of kHz a
 beyond) cost no step. A grid of ``steps`` per forcing period looks for contact: each
 surface's penetration and rate are exact at the grid's ends, a maximum of the
 penetration inside a step is found exactly (Newton on its rate), and a touch is located
-on the exact flow. In contact the force enters through one vector per surface, and the
-step is the integrating-factor RK4 (Lawson): RK4 on ``exp(-lam t) z``, exact for the
-linear part, so that its stability and error come from the contact alone. Its sub-steps
-grow from ``substep / 2^GRADES`` after a touch (the force starts as ``delta^1.5``), are
-cut to land on the period's end, and the switch that ends the force (separation, or the
-clip of the damping law) is located inside the sub-step by the Hermite interpolant of
-the switching function and secant steps of the RK4 sub-step itself.
+on the exact flow. Where a bound on the penetration's rise above its chord cannot rule
+out a touch inside a step (a rod ringing faster than the grid), the step is searched in
+pieces down to an eighth of its fastest component's cycle (``_hidden``). In contact the
+force enters through one vector per surface, and the step is the integrating-factor RK4
+(Lawson): RK4 on ``exp(-lam t) z``, exact for the linear part, so that its stability
+and error come from the contact alone. Its sub-steps grow from ``substep / 2^GRADES``
+after a touch (the force starts as ``delta^1.5``), are cut to land on the period's end,
+and the switch that ends the force (separation, or the clip of the damping law) is
+located inside the sub-step by the Hermite interpolant of the switching function and
+secant steps of the RK4 sub-step itself.
 
 The period map is this integrator's own: a point's state at each forcing period's end,
 every switch located by the same rules, so a settled orbit is a fixed point of it.
@@ -227,6 +230,25 @@ def _inside(s, z, t0, tau, omega, lam, pen, pl, pen_p, gap, buf, D):
 
 
 @njit(**JIT)
+def _leave(s, z, t0, lo, hi, c_lo, omega, lam, pen, pl, pen_p, gap, ch, buf, D):
+    """The last tau in [lo, hi) [s] where surface s, penetrating at lo and not at hi,
+    still penetrates along the contact-free flow from z at t0 (bisection to a few
+    rounding units), and the clip 1 + c_h r [-] there (c_lo at lo)."""
+    c = c_lo
+    for _ in range(SEARCH):
+        tau = 0.5 * (lo + hi)
+        _flow(lam, z, tau, buf, D)
+        d, r = _reach(s, buf, t0 + tau, omega, pen, pl, pen_p, gap, D)
+        if d > 0.0:
+            lo, c = tau, hertz.clip(r, ch[s])
+        else:
+            hi = tau
+        if hi - lo <= 4e-16 * (abs(t0) + hi):
+            break
+    return lo, c
+
+
+@njit(**JIT)
 def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, pl2, pen_p,
             pab, gap, ch, zero, buf, work, stack, D, S):
     """The first entry of surface s into contact (penetration and clip both > 0) inside a
@@ -237,9 +259,11 @@ def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, p
     _weights' excursion over the piece) does not rule out a touch, down to pieces of
     1 / PIECES of a cycle of the fastest component, where the step's own rules apply:
     contact at a piece's end, or a rise and fall whose maximum (_peak) is above zero.
-    Pieces are visited in time order; from the one that reaches ``limit`` [s] on they are
-    left (a touch the step's rules found there stands). Returns (tau of the entry [s],
-    kind), tau = -1 for none. ``work`` (2, D), ``stack`` (DEPTH, 8): room."""
+    After a clip, a piece the surface leaves is searched for the clip's return above
+    zero before it does. Pieces are visited in time order; from the one that reaches
+    ``limit`` [s] on they are left (a touch the step's rules found there stands).
+    Returns (tau of the entry [s], kind), tau = -1 for none. ``work`` (2, D), ``stack``
+    (DEPTH, 8): room."""
     fast = 0.0
     for k in range(D):
         work[0, k] = abs(pen[s, k] * z[k])
@@ -283,6 +307,16 @@ def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, p
                 if dm > 0.0:
                     return _locate(TOUCH, s, z, t0, a, tm, omega, lam, pen, pl, pl2, pen_p,
                                    pab, gap, ch, zero, buf, D, S), TOUCH
+            if da > 0.0 and ca <= 0.0 and db <= 0.0:
+                # off at the clip, out by the piece's end: the clip may come back above
+                # zero while the surface still penetrates
+                td, cd = _leave(s, z, t0, a, b, ca, omega, lam, pen, pl, pen_p, gap, ch, buf,
+                                D)
+                if cd > 0.0:
+                    tc = _locate(CLIP, s, z, t0, a, td, omega, lam, pen, pl, pl2, pen_p, pab,
+                                 gap, ch, zero, buf, D, S)
+                    if _inside(s, z, t0, tc, omega, lam, pen, pl, pen_p, gap, buf, D):
+                        return tc, CLIP
             continue
         m = 0.5 * (a + b)
         _flow(lam, z, m, buf, D)
