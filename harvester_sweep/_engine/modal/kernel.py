@@ -468,6 +468,12 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     prev = np.zeros(3)  # the last sample's time [s], force [N] and its rate [N/s]
     mode, act, grade = st[0], st[1], st[2]
     override = -1  # the kind of switch just crossed off (its function counts as <= 0)
+    # how the present contact began, and whether it has taken a sub-step: a contact that
+    # began where the damping law's clip let the force back on (the surface still in) and
+    # would end at the clip within its first sub-step steps through that clip instead (the
+    # force is continuous across it). Where the motion hugs the clip, each side's flow
+    # pushing towards it, locating every crossing went on forever in steps of 1e-10 s.
+    entered, stepped = TOUCH, True
     status, p_found, run = SETTLED, 0, 0
     if book or nrec >= 0:  # the start is the first sample
         nrec = _sample(z, 0.0, st[3] * T, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega,
@@ -533,6 +539,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     t += best
                     on_grid = False
                     mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
+                    entered, stepped = bkind, False
                     fresh = True
                     if book and bkind == TOUCH:
                         d, r, a = _surface(bs, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
@@ -558,10 +565,11 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 d1, r1, a1 = _surface(act, zn, t + tau, omega, pen, pl, pl2, pen_p, pab, gap, F,
                                       D, S)
                 c1 = hertz.clip(r1, ch[act])
-                if d1 > 0.0 and c1 > 0.0:
+                if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
                     z[:] = zn
                     t += tau
                     grade = min(grade + 1, GRADES)
+                    stepped = True
                     sample = True
                 else:
                     kind = TOUCH if d1 <= 0.0 else CLIP
