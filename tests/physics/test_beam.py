@@ -172,3 +172,15 @@ def test_the_orbit_with_contact_is_an_orbit_of_the_equations(preset, overrides):
     scale = np.abs(y0).max()
     assert np.abs(y1 - y0).max() <= 1e-5 * scale
     assert power == pytest.approx(v["power"][0], rel=1e-5)
+
+
+def test_a_graze_found_again_at_its_separation_does_not_stop_time():
+    """A point of the rod's 64 x 64 grid where a Newton copy only grazes the rod: its
+    separation's root lay at the touch itself, the flow from there met the touch again at
+    once, and the period never ended. It runs to its budget now, every period accounted."""
+    p = resolve_beam_parameters("mak_rod", rod_modes=5, gap=6.071428571428572e-07,
+                                frequency=247.61904761904762)
+    sol = solve_beam([p])
+    v = sol.values
+    assert v["status"][0] in (0, 1) and v["periods_run"][0] <= p["max_periods"] + 2 * 24
+    assert np.isfinite(v["power"][0]) and np.isfinite(sol.ends[0]).all()

@@ -58,6 +58,12 @@ SECANT = 3
 #: deepest halving of a step [-].
 PIECES = 8
 DEPTH = 48
+#: A touch found within this fraction of a grid step after a separation from the same
+#: surface is that graze found again, not a new touch: where the motion only grazes the
+#: surface (no rate into it), the separation's root lies at the touch itself, and the
+#: flow from it met the touch again at once, time no longer advancing (a point of the rod's
+#: 64 x 64 grid never ended) [-].
+GRAZE = 1e-9
 #: Outcome codes, as the lane engine's STATUS.
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
 #: Kinds of switch that turn a surface's force on or off.
@@ -505,6 +511,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         d0 = min(d0, 0.0)
                     elif override == CLIP:
                         c0 = min(c0, 0.0)
+                    # a touch of the surface just left, within GRAZE of the separation, is
+                    # the same graze found again: not taken
+                    floor = GRAZE * h if override == TOUCH and s == act else -1.0
                     mine = math.inf  # this surface's touch by the step's ends
                     if d1 > 0.0 and c1 > 0.0:
                         kind = TOUCH if d0 <= 0.0 else CLIP
@@ -512,8 +521,8 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                                         pen_p, pab, gap, ch, zero, buf, D, S)
                         # the clip's crossing counts where the surface still penetrates:
                         # fast ringing can take it out and back within the step
-                        if kind == TOUCH or _inside(s, z, t, found, omega, lam, pen, pl, pen_p,
-                                                    gap, buf, D):
+                        if (kind == TOUCH and found > floor) or (kind == CLIP and _inside(
+                                s, z, t, found, omega, lam, pen, pl, pen_p, gap, buf, D)):
                             mine = found
                             if found < best or bs < 0:
                                 best, bkind, bs = found, kind, s
@@ -523,14 +532,16 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         if dm > 0.0:
                             found = _locate(TOUCH, s, z, t, 0.0, tm, omega, lam, pen, pl,
                                             pl2, pen_p, pab, gap, ch, zero, buf, D, S)
-                            mine = found
-                            if found < best or bs < 0:
-                                best, bkind, bs = found, TOUCH, s
+                            if found > floor:
+                                mine = found
+                                if found < best or bs < 0:
+                                    best, bkind, bs = found, TOUCH, s
                     if max(d0, d1) + slack[s] > 0.0:  # a touch the ends may not show
                         found, kind = _hidden(s, z, t, tau, mine, d0, r0, c0, d1, r1, c1,
                                               omega, lam, pen, pl, pl2, pen_p, pab, gap, ch,
                                               zero, buf, work, stack, D, S)
-                        if found >= 0.0 and (found < best or bs < 0):
+                        if found >= 0.0 and (found < best or bs < 0) and (
+                                kind != TOUCH or found > floor):
                             best, bkind, bs = found, kind, s
                 override = -1
                 if bs >= 0:
