@@ -90,7 +90,10 @@ def test_a_long_run_is_refused_in_one_line_before_any_work(tmp_path, capsys):
                      'gap = { start = 1e-7, stop = 1e-5, num = 10000 }\n')
     capsys.readouterr()
     assert main(["run", str(sweep), "--output", str(tmp_path / "long.nc")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
+    # (the estimate solves a sample of the grid: on a cold cache the engine's compilation
+    # note comes first)
+    err = [line for line in capsys.readouterr().err.strip().splitlines()
+           if "compiling" not in line]
     assert len(err) == 1 and "1,000,000,000 points" in err[0] and "--yes" in err[0], err
     assert not (tmp_path / "long.nc.partial").exists()
 
