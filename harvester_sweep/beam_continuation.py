@@ -34,7 +34,7 @@ from .beam_runs import (
 from .datasets import multiplier_coordinate
 from .outputs import BIFURCATION_FLAGS, BIFURCATIONS, OUTPUTS
 from .parameters import ParameterError
-from .period_map import sorted_multipliers
+from .period_map import multiplier_shift, sorted_multipliers
 from .version import __version__
 
 #: Corrector iterations at most, and the largest correction (in scaled units) a step's
@@ -332,6 +332,8 @@ _TESTS = (_fold, _doubling, _torus, _grazing)
 #: The kind of bifurcation (outputs.BIFURCATIONS) where each test changes sign.
 _KINDS = {_fold: "fold", _doubling: "period_doubling", _torus: "neimark_sacker",
           _grazing: "grazing"}
+#: The test function of each kind of bifurcation.
+_TEST_OF = {kind: test for test, kind in _KINDS.items()}
 
 
 def _locate(f: _Map, u0, t0, ds: float, test):
@@ -397,7 +399,7 @@ def _accurate(f: _Map, u, jac, t, kind: str, accuracy: float) -> dict:
     values as a dict; ``shift`` is NaN where no location at twice the steps was found,
     ``estimate`` NaN where no correction at twice the steps converged."""
     out, estimate, shift, mult_shift = f.outputs(u), math.nan, math.nan, None
-    test = {v: k for k, v in _KINDS.items()}.get(kind)
+    test = _TEST_OF.get(kind)
     best = None
     for level in range(MAX_LEVELS):
         g = f.finer()
@@ -407,7 +409,8 @@ def _accurate(f: _Map, u, jac, t, kind: str, accuracy: float) -> dict:
                 break
             u2, jac2, t2 = fine
             shift = (u2[f.D] - u[f.D]) * f.span
-            mult_shift = _multiplier_shift(jac, jac2, f.D)
+            mult_shift = multiplier_shift(jac[:, :f.D] + np.eye(f.D),
+                                          jac2[:, :f.D] + np.eye(f.D))
         else:
             t2 = t
             try:
@@ -461,15 +464,6 @@ def _relocated(f: _Map, u, t, test):
             return _locate(f, a, t, float(t @ (b - a)), test)[1]
         w *= RELOCATE_GROWTH
     return None
-
-
-def _multiplier_shift(coarse, fine, D: int) -> np.ndarray:
-    """|mu_fine - mu| [-] of each multiplier of the Jacobian ``coarse`` (D, D + 1) of the
-    map less the identity (in sorted_multipliers' order), each paired with the nearest
-    of ``fine``'s."""
-    mu = sorted_multipliers((coarse[:, :D] + np.eye(D))[None])[0]
-    other = np.linalg.eigvals(fine[:, :D] + np.eye(D))
-    return np.abs(mu[:, None] - other[None, :]).min(axis=1)
 
 
 def _dataset(f: _Map, branches: list, parameter: str, preset) -> xr.Dataset:

@@ -452,8 +452,7 @@ def _variables(values: dict, axes, shape, moving) -> xr.Dataset:
                 arr = np.nan_to_num(arr, nan=-1).astype(dtype)
             data[name] = (list(axes), arr, o.attrs)
     ds = xr.Dataset(data, coords=coords)
-    ds = ds.assign_coords(mode=("mode", np.arange(1, ds.sizes["mode"] + 1),
-                                {"units": "1", "long_name": "bending mode number"}))
+    ds = ds.assign_coords(_mode_coordinate(ds.sizes["mode"]))
     if "multiplier" in ds.dims:
         ds = ds.assign_coords(multiplier_coordinate(ds.sizes["multiplier"]))
     if "status" in ds:
@@ -461,6 +460,12 @@ def _variables(values: dict, axes, shape, moving) -> xr.Dataset:
     if not moving:  # a metric the model lacks: absent, not NaN
         ds = ds.drop_vars("stop_face_max")
     return ds
+
+
+def _mode_coordinate(n: int) -> dict:
+    """The coordinate of the modal amplitudes (dims ("mode",)): modes 1 to n."""
+    return {"mode": ("mode", np.arange(1, n + 1),
+                     {"units": "1", "long_name": "bending mode number"})}
 
 
 def _unit(name: str) -> str:
@@ -547,8 +552,7 @@ def _scene_dataset(series: xr.Dataset, outputs: dict, p: dict, preset: str) -> x
             value = np.nan_to_num(value, nan=-1)
         series[name] = ((), np.asarray(value).astype(dtype), o.attrs)
     series["status"].attrs.update(STATUS_FLAGS)
-    series = series.assign_coords(mode=("mode", np.arange(1, series.sizes["mode"] + 1),
-                                        {"units": "1", "long_name": "bending mode number"}))
+    series = series.assign_coords(_mode_coordinate(series.sizes["mode"]))
     series.attrs.update({"title": "harvester_sweep: a beam orbit's time history",
                          "model": "beam", "Conventions": "CF-1.8", "preset": preset})
     series.attrs.update({f"parameter_{name}": value if not isinstance(value, bool)

@@ -80,8 +80,8 @@ from .period_map import (
     CENTRAL,
     PERTURBATION,
     ROUNDING,
+    multiplier_shift,
     orbit_scales,
-    sorted_multipliers,
     state_size,
 )
 from .results import solve
@@ -897,17 +897,9 @@ def _changes(problem: _Problem, point: _Point, k: int):
     if not found:
         return None
     shift = max((other.lam - point.lam for other in found), key=abs)
-    multipliers = np.max([_multiplier_shift(point.monodromy, other.monodromy)
+    multipliers = np.max([multiplier_shift(point.monodromy, other.monodromy)
                           for other in found], axis=0)
     return shift, multipliers, found[0]
-
-
-def _multiplier_shift(coarse, fine) -> np.ndarray:
-    """|mu_fine - mu| [-] of each multiplier of monodromy ``coarse`` (in
-    sorted_multipliers' order), each paired with the nearest of ``fine``'s."""
-    mu = sorted_multipliers(coarse[None])[0]
-    other = np.linalg.eigvals(fine)
-    return np.abs(mu[:, None] - other[None, :]).min(axis=1)
 
 
 def _which_test(problem: _Problem, point: _Point) -> int:

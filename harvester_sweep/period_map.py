@@ -112,6 +112,14 @@ def sorted_multipliers(jacobians):
     return np.take_along_axis(mult, order, axis=-1)
 
 
+def multiplier_shift(coarse, fine) -> np.ndarray:
+    """|mu_fine - mu| [-] of each multiplier of monodromy ``coarse`` (in
+    sorted_multipliers' order), each paired with the nearest of monodromy ``fine``'s."""
+    mu = sorted_multipliers(coarse[None])[0]
+    other = np.linalg.eigvals(fine)
+    return np.abs(mu[:, None] - other[None, :]).min(axis=1)
+
+
 def sane(metrics):
     """Runs (metric rows (..., len(METRIC))) that neither diverged nor went beyond the
     divergence limit."""

@@ -698,8 +698,9 @@ def run_point(c, r, z, metrics, ring, D, S, K):
     """One point from z (its eigen-coordinates, replaced by its end) to steady state, then
     its orbit measured: metrics (layout.HEAD, then each output's largest and smallest
     value), ring the last SAMPLES strobes (oldest first)."""
+    tables = _tables(c, r, D, S, K)
     (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
-     y_p, scale) = _tables(c, r, D, S, K)
+     y_p, scale) = tables
     omega, steps, substep = r[0], int(r[1]), r[2]
     max_periods, settle, limit = int(r[3]), r[4], r[5]
     T = 2.0 * math.pi / omega
@@ -709,30 +710,25 @@ def run_point(c, r, z, metrics, ring, D, S, K):
     acc = np.zeros(metrics.shape[0])
     p, status, run, _ = _advance(z, st, max_periods, False, rec, -1, omega, T, steps, substep,
                                  lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out,
-                                 outl, out_p, out_f, volt_of(r), strobe, y_p, scale, settle,
+                                 outl, out_p, out_f, int(r[7]), strobe, y_p, scale, settle,
                                  limit, buf, acc, D, S, K)
     if status == SETTLED and p == 0:
         status = NOT_SETTLED
-    _measure(c, r, z, st, max(p, 1), status, metrics, buf, D, S, K)
+    _measure(tables, r, z, st, max(p, 1), status, metrics, buf, D, S, K)
     metrics[HEAD.period] = p
     n = st[3]
     for k in range(SAMPLES):
         ring[k] = buf[(n + k) % SAMPLES]
 
 
-@njit(inline="always", **JIT)
-def volt_of(r):
-    """The voltage's index among the outputs, from a real row."""
-    return int(r[7])
-
-
 @njit(**JIT)
-def _measure(c, r, z, st, periods, status, metrics, buf, D, S, K):
+def _measure(tables, r, z, st, periods, status, metrics, buf, D, S, K):
     """Measure ``periods`` forcing periods from z (modified) in contact state ``st``
     (modified) into metrics (layout.HEAD, then each output's largest and smallest value);
-    ``status`` the outcome so far (not measured where it is DIVERGED)."""
+    ``tables`` the point's (_tables), ``status`` the outcome so far (not measured where it
+    is DIVERGED)."""
     (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
-     y_p, scale) = _tables(c, r, D, S, K)
+     y_p, scale) = tables
     omega, steps, substep, limit, R = r[0], int(r[1]), r[2], r[5], r[6]
     T = 2.0 * math.pi / omega
     acc = np.zeros(metrics.shape[0])
@@ -741,7 +737,7 @@ def _measure(c, r, z, st, periods, status, metrics, buf, D, S, K):
     if status != DIVERGED:
         _, status2, _, _ = _advance(z, st, periods, True, np.empty((0, 1)), -1, omega, T,
                                     steps, substep, lam, grid, pen, pl, pl2, pen_p, pab, inp,
-                                    gap, kh, ch, out, outl, out_p, out_f, volt_of(r), strobe,
+                                    gap, kh, ch, out, outl, out_p, out_f, int(r[7]), strobe,
                                     y_p, scale, 0.0, limit, buf, acc, D, S, K)
         if status2 == DIVERGED:
             status = DIVERGED
@@ -790,10 +786,10 @@ def measure_points(crows, rrows, z, periods, metrics, threads, D, S, K):
 @njit(**JIT)
 def _measure_point(c, r, z, periods, metrics, D, S, K):
     """One point of measure_points."""
-    (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, strobe,
-     y_p, scale) = _tables(c, r, D, S, K)
+    tables = _tables(c, r, D, S, K)
+    pen, pl, pen_p, gap, ch = tables[2], tables[3], tables[5], tables[8], tables[10]
     st = _start(z, r[0], pen, pen_p, pl, gap, ch, D, S)
-    _measure(c, r, z, st, periods, SETTLED, metrics, np.zeros((SAMPLES, D)), D, S, K)
+    _measure(tables, r, z, st, periods, SETTLED, metrics, np.zeros((SAMPLES, D)), D, S, K)
 
 
 @njit(**JIT)
