@@ -132,21 +132,29 @@ def test_no_module_imports_from_a_layer_above_its_own():
             assert _layer(dep) <= _layer(module), f"{module} imports {dep}, a layer above it"
 
 
-def test_the_engine_is_called_through_the_period_map_alone():
-    """Outside _engine, only period_map calls the engine's functions (the other modules read
-    its layouts and constants)."""
-    from harvester_sweep import _engine
-    functions = {name for name in _engine.__all__ if callable(getattr(_engine, name))
+# Each engine and the one module outside _engine that calls it: the lane engine's period
+# map, and the modal engine's (two engines, one per kind of model: docs/engine.md).
+CALLERS = {"_engine": "period_map.py", "_engine.modal": "modal_map.py"}
+
+
+@pytest.mark.parametrize("engine", sorted(CALLERS))
+def test_each_engine_is_called_through_its_period_map_alone(engine):
+    """Outside _engine, only the engine's period map calls its functions (the other
+    modules read its layouts and constants)."""
+    import importlib
+    package = importlib.import_module(f"harvester_sweep.{engine}")
+    functions = {name for name in package.__all__ if callable(getattr(package, name))
                  and name.islower()}
+    alias = engine.rsplit(".", 1)[-1]
     for path in PACKAGE.glob("*.py"):
-        if path.name == "period_map.py":
+        if path.name == CALLERS[engine]:
             continue
         tree = ast.parse(path.read_text())
         used = {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
-                and isinstance(n.value, ast.Name) and n.value.id == "_engine"}
+                and isinstance(n.value, ast.Name) and n.value.id == alias}
         used |= {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
-                 and (n.module or "").endswith("_engine") for a in n.names}
-        assert not used & functions, f"{path.name} calls the engine's {used & functions}"
+                 and (n.module or "").endswith(engine) for a in n.names}
+        assert not used & functions, f"{path.name} calls {engine}'s {used & functions}"
 
 
 def test_no_public_function_or_class_is_defined_in_two_modules():
