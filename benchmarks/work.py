@@ -1,0 +1,146 @@
+"""Where a solve's RK4 work goes: periods per point by what they were run for, and rounds.
+
+    python -m benchmarks.work [--output FILE]
+
+The least work a point needs (issue 47) is its motion until it nears its orbit, Newton's
+runs and the monodromy the orbit is judged on, and the error estimate's runs at twice the
+steps. This benchmark counts each, in forcing periods at the point's own steps per period
+(a run at twice the steps counts twice), on:
+
+- the paper scene from rest, one point, at accuracy 1e-7 and 1e-5 (``results.solve``, as
+  a sweep point runs it: multipliers and error estimate included);
+- the benchmark sweeps of benchmarks/cases.py: the 64 x 64 gap x frequency grid and the 32
+  x 64 one swept up and down (1024 steps per period, no error estimate);
+- the 64 x 64 grid at the automatic step with an error estimate on every point (the
+  preset's accuracy, 1e-7).
+
+The periodic-orbit solver (``orbits``) adds its requests to a ``period_map.Batch`` in one
+order each round: the Newton iterates with copies (forward, then central differences), the
+chord steps, the pieces of trajectory, the error estimate's runs. The counts are read from
+that order, by wrapping ``Batch`` (the solver is not changed); each request's centre lanes
+and copies apart. A sweep's run-time estimate solves a sample of its points first: it is
+run once before the counting, and its sample (kept per process) is not counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+
+import numpy as np
+
+from benchmarks.cases import GRID, HALF, sweep_spec
+from benchmarks.variants import cpu_model
+from harvester_sweep import packing, parameters, period_map, results, run_sweep
+
+#: What a request of a round is, by its place from the end of the round's requests.
+LAST = ("estimate", "trajectory", "chord")
+KINDS = ("trajectory", "Newton centre (copies' and chord steps)", "forward copies",
+         "central copies", "error estimate (twice the steps)")
+
+
+class Tally:
+    """Wraps period_map.Batch while active: RK4 steps of every request, by kind."""
+
+    def __init__(self):
+        self.steps = collections.Counter()
+        self.rounds = 0
+
+    def __enter__(self):
+        tally, add, run = self, period_map.Batch.add, period_map.Batch.run
+        self._saved = add, run
+
+        def counted_add(batch, rows, states, periods, steps=None, copies=None, scale=None,
+                        book=True):
+            index = add(batch, rows, states, periods, steps, copies, scale, book)
+            batch.kinds = getattr(batch, "kinds", []) + [copies]
+            return index
+
+        def counted_run(batch, settle=False):
+            kinds, batch.kinds = getattr(batch, "kinds", []), []
+            out = run(batch, settle)
+            names = [k for k in kinds[:-3]] + list(LAST[::-1])
+            if len(kinds) < 3:  # (not the orbit solver's round)
+                names = ["trajectory"] * len(kinds)
+            for name, ev in zip(names, out):
+                tally.add(name, ev)
+            tally.rounds += bool(kinds)
+            return out
+
+        period_map.Batch.add, period_map.Batch.run = counted_add, counted_run
+        return self
+
+    def __exit__(self, *exc):
+        period_map.Batch.add, period_map.Batch.run = self._saved
+
+    def add(self, name: str, ev) -> None:
+        total = float(ev.work.sum())
+        if name in ("estimate", "trajectory", "chord"):
+            kind = {"estimate": KINDS[4], "trajectory": KINDS[0], "chord": KINDS[1]}[name]
+            self.steps[kind] += total
+        elif len(ev.work):  # copies of a kind: the centre lane, and the copies
+            own = total / (ev.copy_metrics.shape[1] + 1)  # (every lane runs alike)
+            self.steps[KINDS[1]] += own
+            self.steps[KINDS[2] if name == "forward" else KINDS[3]] += total - own
+
+
+def _point(accuracy: float):
+    p = parameters.resolve_parameters("paper", accuracy=accuracy)
+    packed = packing.pack_points([p])
+    estimated = np.ones(1, dtype=bool)
+    results.solve(packed, estimated=estimated)  # (compile)
+    with Tally() as tally:
+        solved = results.solve(packed, estimated=estimated)
+    return tally, 1, int(solved.steps[0])
+
+
+def _sweep(spec: dict):
+    run_sweep(spec, progress=False)  # (compile, and the run-time estimate's sample)
+    with Tally() as tally:
+        ds = run_sweep(spec, progress=False)
+    steps = spec["parameters"].get("steps_per_period")
+    return tally, int(ds["status"].size), steps
+
+
+def _automatic() -> dict:
+    spec = sweep_spec(GRID)
+    spec["parameters"] = {}
+    spec["sweep"].pop("error_estimate")
+    return spec
+
+
+CASES = {
+    "paper scene, one point, accuracy 1e-7": lambda: _point(1e-7),
+    "paper scene, one point, accuracy 1e-5": lambda: _point(1e-5),
+    "64 x 64 grid, 1024 steps, no estimate": lambda: _sweep(sweep_spec(GRID)),
+    "32 x 64 up and down, 1024 steps, no estimate":
+        lambda: _sweep(sweep_spec(HALF, ["up", "down"])),
+    "64 x 64 grid, automatic step, estimate on every point": lambda: _sweep(_automatic()),
+}
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--output")
+    args = parser.parse_args(argv)
+    lines = ["# RK4 work per point, by what it was run for", "",
+             f"Machine: {cpu_model()}. Command: python -m benchmarks.work", "",
+             "Forcing periods per point at 1024 steps per period (the paper point: at its own "
+             "steps), by kind; rounds: the orbit solver's engine calls.", "",
+             "| case | " + " | ".join(KINDS) + " | all | rounds |",
+             "| --- |" + " ---: |" * (len(KINDS) + 2)]
+    for name, case in CASES.items():
+        tally, points, steps = case()
+        per = (steps or 1024) * points
+        cells = [f"{tally.steps[k] / per:.2f}" for k in KINDS]
+        lines.append(f"| {name} | " + " | ".join(cells)
+                     + f" | {sum(tally.steps.values()) / per:.2f} | {tally.rounds} |")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if args.output:
+        with open(args.output, "w") as f:
+            f.write(text)
+
+
+if __name__ == "__main__":
+    main()
