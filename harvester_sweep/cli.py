@@ -998,14 +998,19 @@ def _beam_sweep_source(args):
 def _beam_progress(quiet: bool):
     """A beam sweep's progress hook: one line on stderr per frequency step of a chunk's
     swept lines (each step of its every line at once), per chunk of points, or per chunk
-    on dask; None when quiet."""
+    on dask, with the time the rest will take at the rate so far; None when quiet."""
     if quiet:
         return None
-    begun = [time.perf_counter()]
+    from .run_estimate import duration
+
+    start = time.perf_counter()
+    begun = [start]
 
     def report(done: int, total: int, what: str) -> None:
         now = time.perf_counter()
-        print(f"harvester-sweep: {done}/{total}: {what} in {now - begun[0]:.2g} s",
+        left = "" if done >= total else \
+            f"; about {duration((now - start) * (total - done) / done)} left"
+        print(f"harvester-sweep: {done}/{total}: {what} in {now - begun[0]:.2g} s{left}",
               file=sys.stderr, flush=True)
         begun[0] = now
 

@@ -193,6 +193,9 @@ def test_cli_sweep_writes_the_dataset_with_progress(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "Traceback" not in err
     assert err.count("up ") == 5 and err.count("down ") == 5  # a line per frequency step
+    # each but the last says what is left, at the rate so far
+    steps = [line for line in err.splitlines() if " sweep, " in line]
+    assert all("left" in line for line in steps[:-1]) and "left" not in steps[-1]
     assert str(path) in err.splitlines()[-1]
     with xr.open_dataset(path) as ds:
         assert ds.attrs["model"] == "beam"
