@@ -99,7 +99,7 @@ def main(argv=None) -> None:
     lines += ["", f"Points settled on both: {settled} of {points}; the power differs by more "
               f"than twice the sum of the two estimates at {len(outside)}:", "",
               "| gap [um] | frequency [Hz] | relative difference | / sum of estimates | "
-              "x_max modal [um] | x_max lanes [um] |", "| ---: | ---: | ---: | ---: | ---: | ---: |"]
+              "x_max modal [um] | x_max lanes [um] |", "|" + " ---: |" * 6]
     lines += [f"| {1e6 * g:.3f} | {f:.2f} | {r:.2e} | {q:.1f} | {1e6 * xa:.4f} | "
               f"{1e6 * xb:.4f} |" for g, f, r, q, xa, xb in outside]
     text = "\n".join(lines) + "\n"

@@ -66,6 +66,14 @@ POINT_ROUND_SHARE = 0.01
 RATE_RUNS = 3
 #: RK4 steps of one timed run of the engine's rate (about 10 ms) [-].
 RATE_STEPS = 1_000_000
+#: A grid of fewer points than this is not sampled before it runs (:func:`sweep_estimate`):
+#: the sample solves up to SAMPLE_POINTS of its points and times the engine, a good share
+#: of such a run, and more than the run itself on a grid of a few points [-].
+SAMPLED_GRID = 8 * SAMPLE_POINTS
+#: The rate a small grid's budget is bounded at, a tenth of the nominal one: the solver's
+#: copies, error estimates and re-solves besides the motion, and a slow or loaded machine,
+#: fit in that margin [RK4 steps/s].
+BOUND_RATE = timescales.STEPS_PER_SECOND / 10
 
 
 @dataclass(frozen=True)
@@ -146,13 +154,34 @@ class RunEstimate:
         return self.seconds > LONG_RUN_SECONDS
 
     def describe(self) -> str:
-        """One line: size, steps and time."""
+        """One line: size, steps and time (the size alone where no time was estimated)."""
         todo = "" if self.remaining == self.points else f" ({self.remaining:,} still to run)"
         starts = f" x {self.starts:,} starts" if self.starts > 1 else ""
-        return (f"{self.points:,} point{'s' if self.points != 1 else ''}{starts}{todo}, "
+        size = f"{self.points:,} point{'s' if self.points != 1 else ''}{starts}{todo}"
+        if math.isnan(self.seconds):
+            return size
+        return (f"{size}, "
                 f"about {self.steps:.2g} RK4 steps: roughly "
                 f"{duration(self.seconds)} on {self.threads} thread"
                 f"{'s' if self.threads > 1 else ''}")
+
+
+def sweep_estimate(spec, remaining: int, threads: int) -> RunEstimate:
+    """What a sweep ``spec`` (a SweepSpec) says of ``remaining`` points before it runs:
+    :func:`estimate`; but a grid of fewer than SAMPLED_GRID points that cannot be long (its
+    every point run for its whole budget at its first step would take less than
+    LONG_RUN_SECONDS at BOUND_RATE on one thread) is not sampled, and says its size alone
+    (``seconds`` and ``steps`` NaN)."""
+    threads = max(1, threads)
+    if 0 < spec.n_points < SAMPLED_GRID:
+        points = [spec.point_parameters(spec.values_at(i)) for i in range(spec.n_points)]
+        with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
+            warnings.simplefilter("ignore")
+            rows = pack_points(points).rows
+        budget = float((rows[:, PARAM.max_periods] * rows[:, PARAM.steps]).sum())
+        if budget / BOUND_RATE <= LONG_RUN_SECONDS:
+            return RunEstimate(spec.n_points, remaining, math.nan, threads, math.nan)
+    return estimate(spec, remaining, threads)
 
 
 def estimate(spec, remaining: int, threads: int) -> RunEstimate:

@@ -17,7 +17,7 @@ from tqdm import tqdm
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import chunk_points, compute_chunk
 from .parameters import ParameterError, is_number, value_text
-from .run_estimate import announce, estimate
+from .run_estimate import announce, sweep_estimate
 from .sweep_file import load_sweep
 
 
@@ -37,8 +37,9 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         Finish the partial result of an interrupted run of the same sweep. Without it, an
         existing partial result is refused rather than overwritten.
     progress : bool
-        Print the sweep's size and estimated run time on stderr before it starts, and show a
-        progress bar there (only when stderr is a terminal).
+        Print the sweep's size and estimated run time on stderr before it starts (the size
+        alone for a grid below run_estimate.SAMPLED_GRID points), and show a progress bar
+        there (only when stderr is a terminal).
     workers : int, optional
         Run the chunks on a dask LocalCluster of this many worker processes.
     scheduler : str, optional
@@ -89,7 +90,7 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     with store:  # (holds the output's lock until the file is written)
         finished = [chunk for chunk in store.present() if store.has(chunk)]
         remaining = spec.n_points - sum(chunk_points(spec, chunk) for chunk in finished)
-        announce(estimate(spec, remaining, _threads(workers, scheduler)), yes, progress,
+        announce(sweep_estimate(spec, remaining, _threads(workers, scheduler)), yes, progress,
                  "make the grid coarser")
         finished = set(finished)
         todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]

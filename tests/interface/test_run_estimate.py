@@ -98,12 +98,41 @@ def test_a_long_run_is_refused_in_one_line_before_any_work(tmp_path, capsys):
     assert not (tmp_path / "long.nc.partial").exists()
 
 
+def test_a_small_grid_that_cannot_be_long_is_not_sampled(monkeypatch, capsys):
+    # Below SAMPLED_GRID points the sample would be a good share of the run: the sweep
+    # says its size alone and solves nothing first.
+    def refused(spec):
+        raise AssertionError("a small grid was sampled")
+
+    monkeypatch.setattr(run_estimate, "_sample_of", refused)
+    spec = load_sweep(_line(["up"], num=24))
+    assert spec.n_points < run_estimate.SAMPLED_GRID
+    ds = run_sweep(spec, progress=True)
+    assert (ds["status"] == 0).all()
+    err = [line for line in capsys.readouterr().err.splitlines() if "compiling" not in line]
+    assert err[0] == "harvester-sweep: 24 points"
+
+
+def test_a_small_grid_whose_budgets_could_be_long_is_sampled_and_refused(tmp_path, capsys):
+    # Two points at 1e6 steps a period and a budget of 1e6 periods: the bound (2e12
+    # steps at BOUND_RATE) is beyond an hour, so the sample decides, and it says long.
+    sweep = tmp_path / "small_but_long.toml"
+    sweep.write_text('[parameters]\nsteps_per_period = 1000000\nmax_periods = 1000000\n'
+                     '[grid]\nfrequency = [100.0, 300.0]\n')
+    assert main(["run", str(sweep), "--output", str(tmp_path / "out.nc")]) == 2
+    err = [line for line in capsys.readouterr().err.strip().splitlines()
+           if "compiling" not in line]
+    assert len(err) == 1 and err[0].startswith("harvester-sweep: error: 2 points, about")
+    assert "--yes" in err[0]
+
+
 def test_the_estimate_changes_no_result():
     # A sweep run after its estimate (its sample solved, the engine timed) gives the
     # chunk's numbers bit for bit as the chunk computed alone, with no estimate.
     sweep = _line(["up", "down"], num=12)
     spec = load_sweep(sweep)
     run_estimate._SAMPLES.clear()
+    estimate(spec, spec.n_points, 2)  # (a grid this small is not sampled by the sweep)
     ds = run_sweep(spec, progress=True)
     alone = compute_chunk(spec, 0)
     np.testing.assert_array_equal(ds["power"].values.ravel(), alone["metrics"][..., 0].ravel())
