@@ -16,6 +16,15 @@ estimate is above ``accuracy``, the largest estimate, the flagged bifurcations w
 shift is above ``accuracy`` relative to their value (or NaN: not located at another
 step), and each located bifurcation with its reported shift and steps.
 
+With ``--scan``, the Neimark-Sacker point of that branch and the strong-coupling
+period doubling near 145.32 Hz (gap 3 um, 150-140 Hz) are also located again at each of
+``SCAN_STEPS`` steps per period from where the branch located them (before its
+refinement), by both codes, and their distance from the SciPy references' (``REFERENCES``)
+is tabled. With ``--moves``, the monodromy of each period doubling and Neimark-Sacker
+point that today's code locates on those branches and on the switched strong-coupling
+branch (before refinement) is taken by five-point differences over each of ``MOVES``: the
+scaled disagreement of its two central differences and its test function are tabled.
+
 Writes benchmarks/results/NAME.md (branch_accuracy_45b.md unless told).
 """
 
@@ -54,6 +63,24 @@ CASES = {
                                                     {"gap": 2e-6, **_STOP}, "mark"),
 }
 
+#: The cases of --scan: the Neimark-Sacker branch and the strong-coupling branch through
+#: one period doubling (tests/physics/test_branch_accuracy.py's NS_BRANCH and PD_BRANCH).
+SCAN = {
+    "stop on a spring, gap 2 um, 155-160 Hz (NS)": CASES[
+        "stop on a spring, gap 2 um, 155-160 Hz (NS)"] + ("neimark_sacker",),
+    "strong coupling, gap 3 um, 150-140 Hz (PD)": ("strong_coupling", "frequency", 150.0,
+                                                   140.0, {"gap": 3e-6}, "mark",
+                                                   "period_doubling"),
+}
+#: Where the SciPy references of tests/physics/test_branch_accuracy.py put those
+#: bifurcations [Hz]: the NS point's secant on its pair's modulus (MovingStopMap), the
+#: doubling's on det(I + M) (reference_period_doubling).
+REFERENCES = {"neimark_sacker": 158.0037239231, "period_doubling": 145.3200585540}
+#: Moves of the --moves monodromies, relative to the component scales [-].
+MOVES = (1e-2, 5e-3, 1.25e-3, 3e-4, 8e-5, 2e-5)
+#: Steps per period the --scan locations are taken at [-].
+SCAN_STEPS = (1088, 1392, 2096, 2608, 3296, 4160, 5248, 6608, 8336, 10496, 13232, 17856)
+
 
 def _before(commit: str):
     """continuation.py of ``commit``, as a module of today's package."""
@@ -79,6 +106,60 @@ def _run(module, case):
     return time.perf_counter() - began, branch, spec
 
 
+def _scan(module, case):
+    """The bifurcation of ``case`` located by ``module`` on its branch, then again at each
+    of SCAN_STEPS: its steps and value as the branch located it, and the values found
+    (NaN: not found)."""
+    kind = case[-1]
+    problem, point = _located(module, case[:6], (kind,))[0]
+    k = list(module.TESTED).index(kind)
+    values = []
+    for steps in SCAN_STEPS:
+        other = module._relocate(problem, point, k, steps)
+        values.append(math.nan if other is None else other.lam)
+    return point.steps, point.lam, values
+
+
+def _located(module, case, kinds):
+    """The problem and the bifurcations of ``kinds`` ``module`` locates on ``case``'s
+    branches, before their refinement."""
+    flags = [list(BIFURCATIONS).index(kind) for kind in kinds]
+    found = []
+
+    def keep(problem, point, accuracy, max_steps):
+        if point.bifurcation in flags and point.located:
+            found.append((problem, point))
+        return point
+
+    accurate, module._accurate = module._accurate, keep
+    try:
+        _run(module, case)
+    finally:
+        module._accurate = accurate
+    return found
+
+
+def _moves(case):
+    """Lines of the --moves table for ``case``'s doublings and Neimark-Sacker points."""
+    lines = []
+    kinds = continuation.MULTIPLIER_TESTED
+    for problem, point in _located(continuation, case, kinds):
+        kind = list(BIFURCATIONS)[point.bifurcation]
+        cells = []
+        for h in MOVES:
+            point.precise = None
+            got = problem.multipliers(point, h)
+            if got is None:
+                cells.append("diverged")
+                continue
+            test = continuation._multiplier_tests(got[0])[kinds.index(kind)]
+            cells.append(f"{got[1]:.1e} / {test:+.1e}")
+        point.precise = None
+        lines.append(f"| {kind} {point.lam:.6f} | {point.period} | {point.steps} | "
+                     + " | ".join(cells) + " |")
+    return lines
+
+
 def _summary(branch, spec, accuracy):
     error = np.array([pt.error for pt in branch.points])
     kinds = list(BIFURCATIONS)
@@ -101,6 +182,10 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--output", default="branch_accuracy_45b.md",
                         help="file name under benchmarks/results")
+    parser.add_argument("--scan", action="store_true",
+                        help="also locate the NS point and a period doubling at SCAN_STEPS")
+    parser.add_argument("--moves", action="store_true",
+                        help="also table the doublings' and NS points' monodromies at MOVES")
     args = parser.parse_args()
     warm_up()
     modules = {"before": _before(args.before), "after": continuation}
@@ -114,7 +199,8 @@ def main() -> None:
                 out[name, case] = _summary(branch, checked, checked.base["accuracy"])
     lines = ["# Branch cost of the accuracy target (issue 45)", "",
              f"`python -m benchmarks.branch_accuracy --before {args.before} "
-             f"--rounds {args.rounds} --output {args.output}`", "",
+             f"--rounds {args.rounds} --output {args.output}"
+             + (" --scan" if args.scan else "") + (" --moves`" if args.moves else "`"), "",
              f"CPU: {_cpu()}, {len(os.sched_getaffinity(0))} cores, shared with other "
              "work while measured: compare within this run only. Before: continuation.py "
              f"of {args.before}, loaded beside today's in one process; runs alternated, each "
@@ -131,6 +217,29 @@ def main() -> None:
                          f"{worst:.2g} | {shifted} | {located} |")
         ratio = min(times["after", case]) / min(times["before", case])
         lines.append(f"| {case} | after / before | {ratio:.2f} | | | | | |")
+    if args.scan:
+        lines += ["", "Located again at each step per period from the branch's location "
+                  "(before its refinement): the distance from the reference's [Hz].", "",
+                  "| bifurcation | code | at the branch's step | "
+                  + " | ".join(str(n) for n in SCAN_STEPS) + " |",
+                  "| --- | --- | --- | " + " | ".join("---:" for _ in SCAN_STEPS) + " |"]
+        for case, spec in SCAN.items():
+            reference = REFERENCES[spec[-1]]
+            for name, module in modules.items():
+                steps, value, values = _scan(module, spec)
+                lines.append(f"| {case} | {name} | {value - reference:+.2g} ({steps}) | "
+                             + " | ".join(f"{v - reference:+.2g}" for v in values) + " |")
+    if args.moves:
+        lines += ["", "Each doubling's and Neimark-Sacker point's monodromy over moves of h "
+                  "of the scales (today's code's locations, before refinement): the largest "
+                  "scaled entry of the difference of the central differences over h and 2h, "
+                  "and the test function (det(I + M), or |mu|^2 - 1 of the outermost pair).",
+                  "", "| bifurcation [Hz] | period | steps | "
+                  + " | ".join(f"h = {h:g}" for h in MOVES) + " |",
+                  "| --- | ---: | ---: | " + " | ".join("---" for _ in MOVES) + " |"]
+        for case in ("stop on a spring, gap 2 um, 155-160 Hz (NS)",
+                     "strong coupling, gap 3 um, 150-135 Hz, switch"):
+            lines += _moves(CASES[case])
     (RESULTS / args.output).write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

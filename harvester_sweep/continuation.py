@@ -30,7 +30,14 @@ peak voltage, lam by the range), and the arclength is measured in them.
   by the Illinois method on the arclength between the two points, every trial point
   corrected onto the branch, until the bracket bounds the parameter to ``LOCATE``
   relative; the located point joins the branch with its flag. Where a correction inside
-  the bracket fails, the end of the step is flagged, the step its bracket.
+  the bracket fails, the end of the step is flagged, the step its bracket. A period
+  doubling and a Neimark-Sacker point are located (and report their multipliers) on a
+  monodromy of their own, by five-point differences over the first of
+  ``MULTIPLIER_STEPS`` at which the map is smooth (``MULTIPLIER_AGREEMENT``) at both ends
+  of the bracket: over the Jacobian's ``CENTRAL`` the map's jumps where a switch crosses a
+  step's end enter the multipliers, and the location wandered with the step. Where no
+  step is smooth (orbits of several periods bend at a smaller scale), or that monodromy
+  does not bracket the sign change, it is located on the Jacobian's, as detected.
 - **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
   from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
   the period-p orbit along the eigenvector of the multiplier -1. A branch of even period
@@ -116,6 +123,18 @@ COLLAPSED = 1e-6
 #: 1.6e-7, 6.8e-7, 1.1e-7 and 4.7e-9 at 5584, 6928, 13856 and 15744 steps). The other
 #: points stop where they meet the target, so this costs only where it is needed.
 POINT_REFINEMENTS = 6
+#: Steps of the five-point differences of the monodromy a period doubling's and a
+#: Neimark-Sacker point's tests read where they are located (and such a point reports),
+#: relative to each component's scale, tried in turn [-]: the RK4 map jumps by about its
+#: own error where a switch crosses a step's end, and between the jumps its slope is off by
+#: their size over their spacing, so that over period_map.CENTRAL's step the multipliers,
+#: and the location, wander with the step; over these steps the jumps average out.
+MULTIPLIER_STEPS = (5e-3, 1.25e-3)
+#: ... a step is taken where the central differences over it and over twice it agree to
+#: this (the scaled monodromy's largest entry) [-]; where neither does (an orbit of several
+#: periods, or one that barely touches, bends at a smaller scale) the location reads the
+#: Jacobian's monodromy, as the detection.
+MULTIPLIER_AGREEMENT = 1e-3
 #: Packed rows kept for parameter values already visited [-].
 ROW_CACHE = 4096
 #: Corrections the location of one bifurcation may take [-].
@@ -213,6 +232,9 @@ class _Point:
     # |change| of each multiplier (sorted_multipliers' order) at twice the steps, located
     # bifurcations only
     multiplier_shift: np.ndarray = None
+    # the monodromy by differences over each of MULTIPLIER_STEPS once computed, and the
+    # agreement of its two central differences (_Problem.multipliers)
+    precise: dict = None
 
 
 @dataclass
@@ -346,11 +368,6 @@ class _Problem:
         ``point`` (kept on it: each point is compared with both its neighbours)."""
         if point.tested is not None:
             return point.tested
-        mult = np.linalg.eigvals(point.monodromy)
-        pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
-        # (the outermost pair: a moving stop adds a second one, and the first in eigvals'
-        # order could be either, so that the sign changed where the order did)
-        ns = np.abs(mult[pair]).max() ** 2 - 1 if pair.any() else math.nan
         # the point's own stops (the continued parameter may be a gap)
         r = self.row(self.lam(point.z), self.steps)
         m = point.metrics
@@ -358,10 +375,82 @@ class _Problem:
             if r[PARAM.stop_ratio] == 0 and r[PARAM.gap] < NO_STOP else math.nan
         lower = -r[PARAM.lower_gap] - m[METRIC.x_min] if r[PARAM.lower_gap] < NO_STOP \
             else math.nan
-        point.tested = np.array([point.tangent[self.D],
-                                 np.linalg.det(np.eye(self.D) + point.monodromy),
-                                 ns, upper / self.scale[0], lower / self.scale[0]])
+        point.tested = np.array([point.tangent[self.D], *_multiplier_tests(point.monodromy),
+                                 upper / self.scale[0], lower / self.scale[0]])
         return point.tested
+
+    def multipliers(self, point: _Point, h: float):
+        """The monodromy of ``point``'s orbit by five-point central differences (moves of
+        +-h and +-2h of each component's scale), at its own steps, and the largest entry
+        of the scaled difference of the central differences over h and 2h: one engine call
+        of 4 D lanes, kept on the point; None where a copy's run diverged."""
+        if point.precise is None:
+            point.precise = {}
+        if h not in point.precise:
+            D = self.D
+            move = h * self.scale
+            moved = np.repeat(point.state[None, :], 4 * D, axis=0)
+            for j, factor in enumerate((1.0, -1.0, 2.0, -2.0)):
+                moved[j * D + np.arange(D), np.arange(D)] += factor * move
+            batch = period_map.Batch(D, 0)
+            rows = np.repeat(self.row(self.lam(point.z), point.steps)[None, :], len(moved),
+                             axis=0)
+            batch.add(rows, moved, point.period, book=False)
+            (run,) = batch.run()
+            point.precise[h] = None
+            if run.ok.all():
+                e = run.ends[:, :D].reshape(4, D, D)  # (move, component moved, end state)
+                near = ((e[0] - e[1]) / (2 * move[:, None])).T
+                far = ((e[2] - e[3]) / (4 * move[:, None])).T
+                apart = np.max(np.abs(near - far) * self.scale[None, :] / self.scale[:, None])
+                point.precise[h] = ((4 * near - far) / 3, apart)  # (fourth order in h)
+        return point.precise[h]
+
+    def multiplier_step(self, *points):
+        """The first of MULTIPLIER_STEPS whose monodromy (:meth:`multipliers`) is smooth
+        to MULTIPLIER_AGREEMENT at every one of ``points``; None where none is."""
+        for h in MULTIPLIER_STEPS:
+            found = [self.multipliers(pt, h) for pt in points]
+            if all(f is not None and f[1] <= MULTIPLIER_AGREEMENT for f in found):
+                return h
+        return None
+
+    def locating(self, k: int, h):
+        """Test function ``k`` (TESTED) as a bifurcation is located by it: a period
+        doubling's and a Neimark-Sacker point's read the monodromy of
+        :meth:`multipliers` over ``h`` (NaN where it diverged), the others and those
+        where ``h`` is None are :meth:`tests`'."""
+        if TESTED[k] not in MULTIPLIER_TESTED or h is None:
+            return lambda pt: self.tests(pt)[k]
+
+        def test(pt):
+            m = self.multipliers(pt, h)
+            return math.nan if m is None else \
+                _multiplier_tests(m[0])[MULTIPLIER_TESTED.index(TESTED[k])]
+
+        return test
+
+
+#: The bifurcations whose test functions read the multipliers (_Problem.locating).
+MULTIPLIER_TESTED = ("period_doubling", "neimark_sacker")
+
+
+def _multiplier_tests(monodromy) -> tuple:
+    """A period doubling's test function det(I + M) and a Neimark-Sacker point's
+    |mu|^2 - 1 of the outermost complex pair (NaN without one) of ``monodromy``."""
+    mult = np.linalg.eigvals(monodromy)
+    pair = np.abs(mult.imag) > 1e-9 * np.abs(mult)
+    # (the outermost pair: a moving stop adds a second one, and the first in eigvals'
+    # order could be either, so that the sign changed where the order did)
+    ns = np.abs(mult[pair]).max() ** 2 - 1 if pair.any() else math.nan
+    return np.linalg.det(np.eye(len(monodromy)) + monodromy), ns
+
+
+def _read_multipliers(point: _Point, k: int, h) -> None:
+    """A bifurcation located by test ``k`` on the monodromy over ``h`` reports the
+    multipliers its test read."""
+    if TESTED[k] in MULTIPLIER_TESTED and h is not None and point.precise.get(h):
+        point.monodromy = point.precise[h][0]
 
 
 def continue_branch(preset: str | None | ContinuationSpec = DEFAULTS["preset"],
@@ -616,8 +705,15 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
         tests_a, tests_b = problem.tests(a), problem.tests(b)
         for k, kind in enumerate(TESTED):
             if tests_a[k] * tests_b[k] < 0:
-                found = _locate(problem, a, b, ds, lambda pt, k=k: problem.tests(pt)[k],
-                                tests_a[k], tests_b[k])
+                h = problem.multiplier_step(a, b) if kind in MULTIPLIER_TESTED else None
+                test = problem.locating(k, h)
+                fa, fb = test(a), test(b)
+                if not fa * fb < 0:  # (the multipliers read over h do not bracket it:
+                    # located as detected)
+                    h, test, fa, fb = None, problem.locating(k, None), tests_a[k], tests_b[k]
+                found = _locate(problem, a, b, ds, test, fa, fb)
+                if found is not None:
+                    _read_multipliers(found[1], k, h)
                 if found is None and kind == "grazing" and 0.5 * ds >= min_step:
                     # (flagged at the step's end, a grazing could be far from the stop: a
                     # shorter step brackets it nearer)
@@ -708,6 +804,8 @@ def _locate(problem: _Problem, a: _Point, b: _Point, ds: float, test, fa: float,
         point.tangent = problem.tangent(point.jacobian, a.tangent)
         point.branch = a.branch
         f = test(point)
+        if not np.isfinite(f):
+            return None
         best = (s, point)
         if f == 0:
             break
@@ -885,9 +983,8 @@ def _changes(problem: _Problem, point: _Point, k: int):
     change of each multiplier [-] and the location at twice the steps (or at 3/2 where
     that one failed); None where neither was found. One step ratio is not enough: the map
     jumps where a contact switch crosses a step's end, and a location's error wanders with
-    the step about its fourth-order trend, so that one change can happen to be small (the
-    Neimark-Sacker point of a stop on a spring at 9568 steps a period: 2.8e-7 Hz at twice
-    them, 1.15e-5 Hz at 3/2, 7.1e-6 Hz from the SciPy reference's; docs/numerics.md)."""
+    the step about its fourth-order trend, so that one change can happen to be small
+    (docs/numerics.md)."""
     found = []
     for steps in (2 * point.steps,
                   STEPS_QUANTUM * math.ceil(1.5 * point.steps / STEPS_QUANTUM)):
@@ -931,16 +1028,18 @@ def _relocate(problem: _Problem, point: _Point, k: int, steps: int):
             ends.append(end)
         if len(ends) < 2:
             return None
-        fa, fb = fine.tests(ends[0])[k], fine.tests(ends[1])[k]
+        h = fine.multiplier_step(*ends) if TESTED[k] in MULTIPLIER_TESTED else None
+        test = fine.locating(k, h)
+        fa, fb = test(ends[0]), test(ends[1])
         if fa * fb < 0:
             # (from the bracket's start along the point's tangent, as between two points
             # of the branch)
             origin = replace(ends[0], z=point.z - w * t, tangent=t)
-            found = _locate(fine, origin, ends[1], 2 * w, lambda pt: fine.tests(pt)[k],
-                            fa, fb)
+            found = _locate(fine, origin, ends[1], 2 * w, test, fa, fb)
             if found is None:
                 return None
             located = found[1]
+            _read_multipliers(located, k, h)
             located.bifurcation, located.branch = point.bifurcation, point.branch
             located.arclength = point.arclength
             return located
