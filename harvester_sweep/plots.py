@@ -625,6 +625,10 @@ def _plot_lines(ds, axis: str, scales=None) -> Figure:
             data = ds[name].sel(direction=direction) if direction else ds[name]
             ax.plot(x, data / scale, ms=3, lw=1.0, label=f"{direction or 'from rest'}",
                     **_LINE_STYLES[direction])
+            if "status" in ds:
+                status = ds["status"].sel(direction=direction) if direction else ds["status"]
+                _mark_unsettled(ax, status.values, x, data.values / scale, legend=False,
+                                where=direction or "")
         ax.plot(x, linear[name] / scale, color="0.4", lw=0.8, ls=":",
                 label="no stop (closed form)")
         if log_y:
@@ -676,6 +680,45 @@ def _mesh(ax, ds, field, x_name: str, y_name: str, scales, **style):
     return ax.pcolormesh(axes[0], axes[1], field.values, shading="flat", **style)
 
 
+#: How a map or a curve marks its points that are not a steady state, by status name.
+_UNSETTLED = {"not settled": "x", "diverged": "+", "too stiff": "1"}
+
+
+def _mark_unsettled(ax, status, x, y, legend: bool = True, where: str = "") -> None:
+    """Mark the points whose ``status`` (numbers of the registry) is not "settled" at
+    display coordinates ``x``, ``y`` (arrays of its shape): a marker per status, black
+    on a white edge so that it reads on any colour, counted in the legend (drawn here
+    when ``legend``; ``where``: a direction, said with the count). A reader must see which
+    values are not a steady state's (a not-settled point's metrics are its last
+    periods')."""
+    from matplotlib import patheffects
+
+    status = np.asarray(status)
+    x, y = (np.broadcast_to(v, status.shape) for v in (x, y))
+    marked = False
+    for name, marker in _UNSETTLED.items():
+        mask = status == STATUS_NAMES.index(name)
+        if mask.any():
+            ax.plot(x[mask], y[mask], ls="none", marker=marker, color="k", ms=6,
+                    path_effects=[patheffects.withStroke(linewidth=2.5, foreground="w")],
+                    label=f"{name} ({int(mask.sum())}{', ' + where if where else ''})")
+            marked = True
+    if marked and legend:
+        ax.legend(fontsize="small", loc="upper right", framealpha=0.8)
+
+
+def _cell_centres(ax, field, x_name: str, y_name: str, scales, ds):
+    """The display coordinates of the cells _mesh draws for ``field`` (sorted and
+    transposed as it does)."""
+    field = field.sortby([x_name, y_name]).transpose(y_name, x_name)
+    coords = []
+    for name in (x_name, y_name):
+        values = field[name].values
+        scale = _axis(ds, name, values, _is_log(ds, name, values, scales))[0]
+        coords.append(values / scale)
+    return field, coords[0][None, :], coords[1][:, None]
+
+
 def _plot_maps(ds, axes_names: list, scales=None) -> Figure:
     """Maps of the power (else the first metric held) over two grid axes."""
     from matplotlib.colors import LogNorm
@@ -694,6 +737,10 @@ def _plot_maps(ds, axes_names: list, scales=None) -> Figure:
     for ax, direction in zip(panels, directions):
         field = ds[name].sel(direction=direction) if direction else ds[name]
         mesh = _mesh(ax, ds, field / scale, x_name, y_name, scales, norm=norm)
+        if "status" in ds:
+            status = ds["status"].sel(direction=direction) if direction else ds["status"]
+            status, xs, ys = _cell_centres(ax, status, x_name, y_name, scales, ds)
+            _mark_unsettled(ax, status.values, xs, ys)
         ax.set_title(f"{name}: {direction or 'each point from rest'}", loc="left",
                      fontsize="medium")
         _no_offset(ax)
@@ -818,8 +865,10 @@ def plot_beam_sweep(ds, path=None) -> Figure:
             for ax, name, scale in ((panels[0], "power", None), (panels[1], "x_max", 1e-6),
                                     (panels[2], "root_strain_max", 1e-6)):
                 values = part[name].values
-                s = scale or _display("W", values)[0]
+                s = scale or _display("W", ds["power"].values)[0]
                 ax.plot(x / x_scale, values / s, lw=1.0, ms=4, label=label, **style)
+                _mark_unsettled(ax, part["status"].values, x / x_scale, values / s,
+                                legend=False, where=d or "")
             panels[1].plot(x / x_scale, part["x_min"].values / 1e-6, lw=1.0, ms=4,
                            **dict(style, alpha=0.5))
         power_scale, power_shown = _display("W", ds["power"].values)
@@ -828,22 +877,29 @@ def plot_beam_sweep(ds, path=None) -> Figure:
         panels[2].set_ylabel("root strain [\u00b5strain]")
         for ax in panels:
             ax.grid(alpha=0.3)
-        if directions != [None]:
+        if directions != [None] or (ds["status"].values != 0).any():
             panels[0].legend(fontsize="small")
         panels[-1].set_xlabel(f"{axis} [{x_shown}]")
     elif len(grid) == 2:
+        from matplotlib.colors import LogNorm
+
         fig = _new_figure((11, 4.5))
         part = ds if directions == [None] else ds.sel(direction=directions[0])
-        for ax, (name, unit) in zip(fig.subplots(1, 2), (("power", "W"),
-                                                         ("root_strain_max", "1"))):
-            values = part[name].transpose(grid[1], grid[0]).values
-            scale, shown = (1e-6, "\u00b5strain") if unit == "1" else _display(unit, values)
-            xs = [part[g].values for g in grid]
-            mesh = ax.pcolormesh(_edges(xs[0], False), _edges(xs[1], False), values / scale,
-                                 shading="flat")
+        x_name, y_name = sorted(grid, key=lambda a: a != "frequency")  # frequency across
+        for ax, name in zip(fig.subplots(1, 2), ("power", "root_strain_max")):
+            values = part[name].values
+            positive = values[np.isfinite(values) & (values > 0)]
+            if name == "power" and positive.size:  # (as the tip-mass model's maps)
+                norm, (scale, shown) = LogNorm(positive.min(), positive.max()), (1.0, "W")
+            else:
+                norm, scale, shown = None, 1e-6, "\u00b5strain"
+            mesh = _mesh(ax, ds, part[name] / scale, x_name, y_name, None, norm=norm)
             fig.colorbar(mesh, ax=ax, label=f"{name} [{shown}]")
-            ax.set_xlabel(f"{grid[0]} [{_unit(ds, grid[0])}]")
-            ax.set_ylabel(f"{grid[1]} [{_unit(ds, grid[1])}]")
+            status, xs, ys = _cell_centres(ax, part["status"], x_name, y_name, None, ds)
+            _mark_unsettled(ax, status.values, xs, ys)
+            ax.set_title(f"{name}: {directions[0] or 'each point from its linear steady state'}",
+                         loc="left", fontsize="medium")
+            _no_offset(ax)
     else:
         raise ParameterError(f"the dataset has {len(grid)} grid axes ({', '.join(grid)}): "
                              "plot draws one or two; select a slice first")

@@ -327,3 +327,48 @@ def test_a_beam_branch_draws_each_branch_apart_in_the_colour_of_its_period():
     assert "stable, 1 period" in labels and "stable, 2 periods" in labels
     notes = [t.get_text() for t in ax.texts]
     assert any(f"{f[8]:.6g}" in n for n in notes) and any(f"{f[21]:.6g}" in n for n in notes)
+
+
+def _marks(ax, name):
+    """The points drawn for the status ``name``: (label, x, y) of each such marker line."""
+    return [(line.get_label(), line.get_xdata(), line.get_ydata()) for line in ax.get_lines()
+            if line.get_label().startswith(name)]
+
+
+def test_points_that_are_not_a_steady_state_are_marked_where_they_lie(load_map):
+    """A map's cell and a curve's point whose status is not "settled" carry a marker of
+    that status, counted in the legend: its metrics are not a steady state's. (The
+    statuses are set by hand on a real run: the figure must show what the file says.)"""
+    ds = load_map.copy(deep=True)
+    ds["status"].loc[dict(direction="up", frequency=240.0, resistance=1e4)] = 1
+    ds["status"].loc[dict(direction="down", frequency=280.0, resistance=1e3)] = 2
+    fig = plot_sweep(ds)
+    up, down = fig.axes[0], fig.axes[1]
+    ((label, x, y),) = _marks(up, "not settled")
+    assert label == "not settled (1)" and (x[0], y[0]) == pytest.approx((240.0, 1e4))
+    assert not _marks(up, "diverged") and not _marks(down, "not settled")
+    ((label, x, y),) = _marks(down, "diverged")
+    assert label == "diverged (1)" and (x[0], y[0]) == pytest.approx((280.0, 1e3))
+    assert any(t.get_text() == "not settled (1)" for t in up.get_legend().get_texts())
+    line = plot_sweep(ds.sel(resistance=1e4))  # (power and x_max against frequency)
+    for ax in line.axes[:2]:
+        ((label, x, y),) = _marks(ax, "not settled")
+        assert label == "not settled (1, up)" and x[0] == pytest.approx(240.0)
+    power = line.axes[0].get_lines()[0].get_ydata()[1]  # (the up curve's, at 240 Hz)
+    assert _marks(line.axes[0], "not settled")[0][2][0] == pytest.approx(power)
+
+
+def test_a_beam_map_is_drawn_as_the_tip_mass_models_with_its_unsettled_points():
+    from harvester_sweep.beam_runs import beam_sweep
+    from harvester_sweep.plots import plot_beam_sweep
+
+    ds = beam_sweep({"gap": [1e-6, 2e-6], "frequency": [150.0, 200.0]}, "bimorph_tip",
+                    n_modes=1)
+    ds["status"].loc[dict(gap=2e-6, frequency=150.0)] = 1
+    fig = plot_beam_sweep(ds)
+    power, strain = fig.axes[:2]  # (the colour bars after them)
+    for ax in (power, strain):
+        assert ax.get_xlabel() == "frequency [Hz]" and ax.get_ylabel() == f"gap [{UM}]"
+        ((label, x, y),) = _marks(ax, "not settled")
+        assert label == "not settled (1)" and (x[0], y[0]) == pytest.approx((150.0, 2.0))
+    assert power.collections[0].norm.__class__.__name__ == "LogNorm"
