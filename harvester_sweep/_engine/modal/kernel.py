@@ -15,7 +15,8 @@ pieces down to an eighth of its fastest component's cycle (``_hidden``). In cont
 force enters through one vector per surface, and the step is the integrating-factor RK4
 (Lawson): RK4 on ``exp(-lam t) z``, exact for the linear part, so that its stability
 and error come from the contact alone. Its sub-steps grow from ``substep / 2^GRADES``
-after a touch (the force starts as ``delta^1.5``), are cut to land on the period's end,
+after a touch (the force starts as ``delta^1.5``), shrink towards the separation
+predicted from the penetration (it ends so too), are cut to land on the period's end,
 and the switch that ends the force (separation, or the clip of the damping law) is
 located inside the sub-step by the Hermite interpolant of the switching function and
 secant steps of the RK4 sub-step itself.
@@ -42,6 +43,9 @@ from .layout import HEAD, complex_fields, real_fields
 #: force grows as delta^1.5 from the touch, which RK4 integrates to its order only on
 #: steps that shrink towards it [-].
 GRADES = 4
+#: A sub-step is at most this fraction of the time left to the predicted separation (the
+#: force ends as delta^1.5 too: one sub-step cut there erred by where it fell in it) [-].
+APPROACH = 0.5
 #: Strobes kept for the settle test, and the longest orbit it looks for [periods].
 SAMPLES = 16
 MAX_ORBIT = 8
@@ -130,6 +134,21 @@ def _switch(kind, s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, ch, F, D, S):
     if kind == TOUCH:
         return d, r
     return hertz.clip(r, ch[s]), ch[s] * a
+
+
+@njit(inline="always", **JIT)
+def _until(d, r, a):
+    """The time [s] left to the separation predicted at a penetration d > 0 [m], its rate
+    r [m/s] and acceleration a [m/s^2]: the first root of d + r tau + a tau^2 / 2, or
+    2 d / -r where that parabola turns back before zero (its discriminant clipped at
+    zero, so that the prediction, and the sub-steps cut by it, move continuously with the
+    state); inf where the penetration does not fall."""
+    q = max(r * r - 2.0 * a * d, 0.0)
+    if r < 0.0:
+        return 2.0 * d / (math.sqrt(q) - r)
+    if a < 0.0:
+        return (r + math.sqrt(q)) / -a
+    return math.inf
 
 
 @njit(**JIT)
@@ -480,6 +499,13 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     # force is continuous across it). Where the motion hugs the clip, each side's flow
     # pushing towards it, locating every crossing went on forever in steps of 1e-10 s.
     entered, stepped = TOUCH, True
+    # the time left to the predicted separation of the surface in contact [s] (_until at
+    # the present state)
+    near = math.inf
+    if mode == 1:
+        _forces(z, 0.0, omega, pen, pl, pen_p, gap, kh, ch, F, D, S)
+        d1, r1, a1 = _surface(act, z, 0.0, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S)
+        near = _until(d1, r1, a1) if d1 > 0.0 else math.inf
     status, p_found, run = SETTLED, 0, 0
     if book or nrec >= 0:  # the start is the first sample
         nrec = _sample(z, 0.0, st[3] * T, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega,
@@ -551,6 +577,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     on_grid = False
                     mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
                     entered, stepped = bkind, False
+                    near = math.inf
                     fresh = True
                     if book and bkind == TOUCH:
                         d, r, a = _surface(bs, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
@@ -564,9 +591,11 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     sample = True
             else:  # ---- in contact: RK4 sub-steps in the frame of the flow
                 tau = substep * 0.5 ** (GRADES - grade)
-                last = t + tau >= T * (1.0 - 1e-14)
-                if last:
-                    tau = T - t
+                # shrinking towards the predicted separation (APPROACH)
+                cut = max(APPROACH * near, substep * 0.5 ** GRADES)
+                last = t + min(tau, cut) >= T * (1.0 - 1e-14)
+                if last or cut < tau:
+                    tau = T - t if last else cut
                     _exps(lam, tau, e1, eh, D)
                     _lawson(z, t, tau, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
                             w2, w3, w4, stages, D, S)
@@ -581,6 +610,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     t += tau
                     grade = min(grade + 1, GRADES)
                     stepped = True
+                    near = _until(d1, r1, a1)
                     sample = True
                 else:
                     kind = TOUCH if d1 <= 0.0 else CLIP

@@ -1,0 +1,55 @@
+"""The beam's error estimates are honest: the one-mode beam at its tip is the tip-mass
+model, so each settled point's outputs must lie within twice its ``error_estimate`` of the
+lane engine's orbit of the reduced model at accuracy 1e-11 (plain RK4 on its own, an
+independent reference), and within the accuracy asked.
+
+The points are those of the 24 x 24 grid of benchmarks/engines.py (gap 0.25-4 um,
+180-300 Hz) where the estimate was least honest: the error of a contact sub-step cut at
+the separation depended on where the separation fell in it, so the change between two
+halvings could be a tenth of the error (docs/numerics.md, "The beam")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harvester_sweep import bimorph as bm
+from harvester_sweep import run_scene
+from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
+from harvester_sweep.beam_runs import beam_sweep
+
+ACCURACY = 1e-7
+GAPS = np.linspace(0.25e-6, 4e-6, 24)  # [m]: benchmarks/engines.py's grid
+FREQUENCIES = np.linspace(180.0, 300.0, 24)  # [Hz]
+#: (gap index, frequency index): the two above 1e-7 and up to 11 times their estimates
+#: before, the next four above twice their estimates, and the three nearest to their
+#: estimates after.
+POINTS = [(2, 17), (3, 16), (0, 18), (5, 14), (14, 2), (1, 19), (5, 12), (7, 11), (6, 12)]
+OUTPUTS = ("power", "v_peak", "x_max")
+#: Where the two engines part at their finest steps: the beam's power converges to 1e-10 to
+#: 2.5e-10 of the lane engine's at 1e-11 on these points (sub-steps down to 1.9e-8 s) [-].
+FLOOR = 5e-10
+
+
+@pytest.fixture(scope="module")
+def reduced():
+    return bm.as_tip_mass_parameters(bimorph(resolve_beam_parameters("bimorph_tip",
+                                                                     n_modes=1)))
+
+
+@pytest.mark.parametrize("i, j", POINTS)
+def test_the_beams_error_is_within_twice_its_estimate_and_the_accuracy(reduced, i, j):
+    gap, f = float(GAPS[i]), float(FREQUENCIES[j])
+    beam = beam_sweep({"gap": [gap], "frequency": [f]}, "bimorph_tip", n_modes=1,
+                      accuracy=ACCURACY)
+    ref = run_scene("paper", **reduced, gap=gap, frequency=f, accuracy=1e-11).metrics
+    assert int(beam["status"].values.ravel()[0]) == 0 and ref["status"] == "settled"
+    got = {name: float(beam[name].values.ravel()[0]) for name in OUTPUTS}
+    # the same orbit (both from the linear steady state)
+    assert abs(got["x_max"] - ref["x_max"]) < 1e-3 * abs(ref["x_max"])
+    estimate = float(beam["error_estimate"].values.ravel()[0])
+    assert estimate <= ACCURACY
+    for name in OUTPUTS:
+        error = abs(got[name] - ref[name]) / abs(ref[name])
+        assert error <= 2 * estimate + FLOOR, (name, error, estimate)
+        assert error <= ACCURACY, (name, error)
