@@ -26,8 +26,8 @@ FREQUENCIES = np.linspace(180.0, 300.0, 24)  # [Hz]
 #: estimates after.
 POINTS = [(2, 17), (3, 16), (0, 18), (5, 14), (14, 2), (1, 19), (5, 12), (7, 11), (6, 12)]
 OUTPUTS = ("power", "v_peak", "x_max")
-#: Where the two engines part at their finest steps: the beam's power converges to 1e-10 to
-#: 2.5e-10 of the lane engine's at 1e-11 on these points (sub-steps down to 1.9e-8 s) [-].
+#: Where the two engines part at their finest steps: the beam's power settles 1.3e-10 and
+#: 2.3e-10 from the lane engine's at 1e-11 at (2, 17) and (5, 12), sub-steps to 1.9e-8 s [-].
 FLOOR = 5e-10
 
 
