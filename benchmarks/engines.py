@@ -23,7 +23,7 @@ import time
 import numba
 import numpy as np
 
-from benchmarks.variants import cpu_model
+from benchmarks.variants import cpu_model, report
 from harvester_sweep import bimorph as bm
 from harvester_sweep import run_sweep
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
@@ -102,11 +102,7 @@ def main(argv=None) -> None:
               "x_max modal [um] | x_max lanes [um] |", "|" + " ---: |" * 6]
     lines += [f"| {1e6 * g:.3f} | {f:.2f} | {r:.2e} | {q:.1f} | {1e6 * xa:.4f} | "
               f"{1e6 * xb:.4f} |" for g, f, r, q, xa, xb in outside]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if args.output:
-        with open(args.output, "w") as f:
-            f.write(text)
+    report(lines, args.output)
 
 
 if __name__ == "__main__":

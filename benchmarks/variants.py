@@ -16,6 +16,7 @@ import math
 import platform
 import subprocess
 import time
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -62,6 +63,14 @@ def cpu_model() -> str:
                     if line.startswith("Model name"))
     except (OSError, StopIteration):
         return platform.processor() or "unknown"
+
+
+def report(lines: list, output=None) -> None:
+    """Print a benchmark's markdown ``lines``, and write them to ``output`` when given."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if output:
+        Path(output).write_text(text, encoding="utf-8")
 
 
 def main(argv=None) -> None:

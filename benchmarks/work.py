@@ -30,7 +30,7 @@ import collections
 import numpy as np
 
 from benchmarks.cases import GRID, HALF, sweep_spec
-from benchmarks.variants import cpu_model
+from benchmarks.variants import cpu_model, report
 from harvester_sweep import packing, parameters, period_map, results, run_sweep
 
 #: What a request of a round is, by its place from the end of the round's requests.
@@ -135,11 +135,7 @@ def main(argv=None) -> None:
         cells = [f"{tally.steps[k] / per:.2f}" for k in KINDS]
         lines.append(f"| {name} | " + " | ".join(cells)
                      + f" | {sum(tally.steps.values()) / per:.2f} | {tally.rounds} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if args.output:
-        with open(args.output, "w") as f:
-            f.write(text)
+    report(lines, args.output)
 
 
 if __name__ == "__main__":
