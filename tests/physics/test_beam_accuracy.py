@@ -3,10 +3,10 @@ model, so each settled point's outputs must lie within twice its ``error_estimat
 lane engine's orbit of the reduced model at accuracy 1e-11 (plain RK4 on its own, an
 independent reference), and within the accuracy asked.
 
-The points are those of the 24 x 24 grid of benchmarks/engines.py (gap 0.25-4 um,
-180-300 Hz) where the estimate was least honest: the error of a contact sub-step cut at
-the separation depended on where the separation fell in it, so the change between two
-halvings could be a tenth of the error (docs/numerics.md, "The beam")."""
+The points are of the 24 x 24 grid of benchmarks/engines.py (gap 0.25-4 um, 180-300 Hz):
+where a contact sub-step cut at the separation, its error set by where the separation
+falls in it, makes the change between two halvings no bound on the error
+(docs/numerics.md, "The beam"; benchmarks/results/beam_accuracy.md)."""
 
 from __future__ import annotations
 
@@ -21,9 +21,8 @@ from harvester_sweep.beam_runs import beam_sweep
 ACCURACY = 1e-7
 GAPS = np.linspace(0.25e-6, 4e-6, 24)  # [m]: benchmarks/engines.py's grid
 FREQUENCIES = np.linspace(180.0, 300.0, 24)  # [Hz]
-#: (gap index, frequency index): the two above 1e-7 and up to 11 times their estimates
-#: before, the next four above twice their estimates, and the three nearest to their
-#: estimates after.
+#: (gap index, frequency index): the six of the grid whose error exceeds twice the estimate
+#: with sub-steps cut at the separation, and the three nearest their estimates without.
 POINTS = [(2, 17), (3, 16), (0, 18), (5, 14), (14, 2), (1, 19), (5, 12), (7, 11), (6, 12)]
 OUTPUTS = ("power", "v_peak", "x_max")
 #: Where the two engines part at their finest steps: the beam's power settles 1.3e-10 and

@@ -44,7 +44,7 @@ from .layout import HEAD, complex_fields, real_fields
 #: steps that shrink towards it [-].
 GRADES = 4
 #: A sub-step is at most this fraction of the time left to the predicted separation (the
-#: force ends as delta^1.5 too: one sub-step cut there erred by where it fell in it) [-].
+#: force ends as delta^1.5 too: a sub-step cut there errs by where it falls in it) [-].
 APPROACH = 0.5
 #: Strobes kept for the settle test, and the longest orbit it looks for [periods].
 SAMPLES = 16
