@@ -40,9 +40,12 @@ peak voltage, lam by the range), and the arclength is measured in them.
   does not bracket the sign change, it is located on the Jacobian's, as detected.
 - **Period doubling.** With ``period_doubling="switch"`` the doubled branch is continued
   from each located period doubling: its orbits are fixed points of ``P^2p`` that leave
-  the period-p orbit along the eigenvector of the multiplier -1. A branch of even period
-  ends where its orbit has half that period (``COLLAPSED``): it has met the orbit it
-  doubles, and would follow it under twice its period.
+  the period-p orbit along the eigenvector of the multiplier -1. A doubled branch ends
+  where it meets the orbit it doubles: where its offset after half its periods along that
+  eigenvector changes sign (:func:`_half_offset`), or where its orbit has half its period
+  (``COLLAPSED``); followed on, it would repeat orbits already found. The doubling it
+  ends at starts no branch of its own, so that a branch between two doublings is
+  followed once.
 - **Error.** Every point is corrected again at twice its steps per period (its Jacobian
   reused): at its own parameter value, the change of its metrics is its
   ``error_estimate`` (near a fold, where that orbit may not exist, it is taken normal to
@@ -235,6 +238,10 @@ class _Point:
     # the monodromy by differences over each of MULTIPLIER_STEPS once computed, and the
     # agreement of its two central differences (_Problem.multipliers)
     precise: dict = None
+    # a doubled branch's head: the doubling direction (scaled, unit) it left the orbit it
+    # doubles along, and the parameter of that doubling
+    doubling: np.ndarray = None
+    born: float = math.nan
 
 
 @dataclass
@@ -644,14 +651,22 @@ def _continue(spec: ContinuationSpec) -> Branch:
                            f"{parameter} = {start:g} [{PARAMETERS[parameter].unit}]")
     first.tangent = problem.tangent(first.jacobian, along * np.sign(stop - start))
     out = Branch()
-    queue = [(first, 0)]
+    queue = [(first, None)]  # (a head, the branch whose doubling it was born at)
+    met = set()  # (branch, doubling's parameter) where a doubled branch ended
     while queue and len(out.points) < max_points:
-        head, number = queue.pop(0)
-        head.branch = number
-        found, why = _follow(problem, head, step, min_step, max_step,
-                             max_points - len(out.points))
+        head, parent = queue.pop(0)
+        if (parent, head.born) in met:  # (that doubled branch is followed already)
+            continue
+        head.branch = number = len(out.stops)
+        found, end, why = _follow(problem, head, step, min_step, max_step,
+                                  max_points - len(out.points))
         out.points += found
         out.stops.append(why)
+        if end is not None:  # (at the doubling of its parent nearest its end)
+            doublings = [problem.lam(pt.z) for pt in out.points if pt.branch == parent
+                         and pt.bifurcation == list(BIFURCATIONS).index("period_doubling")]
+            if doublings:
+                met.add((parent, min(doublings, key=lambda lam: abs(lam - end))))
         if spec.switch:
             for point in found:
                 if (point.bifurcation == list(BIFURCATIONS).index("period_doubling")
@@ -659,7 +674,7 @@ def _continue(spec: ContinuationSpec) -> Branch:
                     doubled = _doubled(problem, point, step)
                     # (a head that Newton took back to the orbit it doubles starts nothing)
                     if doubled is not None and not _collapsed(problem, doubled):
-                        queue.append((doubled, len(out.stops) + len(queue)))
+                        queue.append((doubled, number))
     out.points = [_accurate(problem, point, spec.accuracy, spec.max_steps)
                   for point in out.points]
     out.run_time = time.perf_counter() - began
@@ -668,13 +683,20 @@ def _continue(spec: ContinuationSpec) -> Branch:
 
 def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
     """The points of one branch from ``head`` (included) to where it leaves the range,
-    stalls or spends ``budget``; and why it ended."""
+    stalls or spends ``budget``; for a doubled branch that ended where it met the orbit it
+    doubles, the parameter of its last point (else None); and why it ended. That meeting
+    is where its orbit's offset after half its periods, along the doubling direction,
+    changes sign (the branch passes through the orbit it doubles onto the same orbits
+    shifted by half their periods), or where its orbit is the one it doubles
+    (:func:`_collapsed`)."""
     points = [head]
     a, ds = head, step
     phases = problem.phases(head.z, head.period, head.state)  # the head's orbit, p phases
     phases = np.concatenate([phases / problem.scale,
                              np.full((head.period, 1), head.z[problem.D])], axis=1)
     unresolved = None  # the parameter where the last step found the map the identity
+    side = None if head.doubling is None else np.sign(_half_offset(problem, head,
+                                                                    head.doubling))
     while len(points) < budget:
         predicted = a.z + ds * a.tangent
         b = problem.correct(predicted, a.tangent, a.period, a.state)
@@ -686,20 +708,23 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
             b.tangent = problem.tangent(b.jacobian, a.tangent)
             b.branch = a.branch
             turn = math.acos(min(1.0, float(a.tangent @ b.tangent)))
-        if b is not None and turn <= MAX_TURN and _collapsed(problem, b):
-            return points, (f"back on a period-{b.period // 2} orbit at {problem.parameter} "
-                            f"= {problem.lam(b.z):.9g} (the period-doubled orbit met the "
-                            "orbit it doubles, at a period doubling of that one)")
+        if b is not None and turn <= MAX_TURN and (_collapsed(problem, b) or (
+                side is not None and _half_offset(problem, b, head.doubling) * side < 0)):
+            return points, problem.lam(a.z), (
+                f"back on a period-{b.period // 2} orbit at {problem.parameter} = "
+                f"{problem.lam(b.z):.9g} (the period-doubled orbit met the orbit it doubles, "
+                "at a period doubling of that one)")
         if b is None or turn > MAX_TURN:
             ds *= 0.5
             if ds < min_step and unresolved is not None:
-                return points, (f"stopped at {problem.parameter} = {problem.lam(a.z):.9g}: "
-                                f"at {unresolved:.3g} and beyond the period map is the "
-                                "identity to rounding, and no orbit can be resolved; give a "
-                                "nearer stop")
+                return points, None, (
+                    f"stopped at {problem.parameter} = {problem.lam(a.z):.9g}: at "
+                    f"{unresolved:.3g} and beyond the period map is the identity to "
+                    "rounding, and no orbit can be resolved; give a nearer stop")
             if ds < min_step:
-                return points, (f"stalled at {problem.parameter} = {problem.lam(a.z):.9g}: "
-                                f"no correction within min_step = {min_step:g}")
+                return points, None, (
+                    f"stalled at {problem.parameter} = {problem.lam(a.z):.9g}: no correction "
+                    f"within min_step = {min_step:g}")
             continue
         located, shorter = [], False
         tests_a, tests_b = problem.tests(a), problem.tests(b)
@@ -743,23 +768,31 @@ def _follow(problem: _Problem, head: _Point, step, min_step, max_step, budget):
         points += [pt for _, pt in located][:budget - len(points)]
         if again:  # (a loop whose phases the chord test missed: it came back to a point)
             kind = list(BIFURCATIONS)[again[0].bifurcation]
-            return points, (f"closed on itself: back at the {kind} "
-                            f"at {problem.parameter} = {problem.lam(again[0].z):.9g}")
+            return points, None, (f"closed on itself: back at the {kind} at "
+                                  f"{problem.parameter} = {problem.lam(again[0].z):.9g}")
         if beyond:
             if end is not None and len(points) < budget:
                 end[1].arclength = a.arclength + end[0]
                 points.append(end[1])
-            return points, f"left the range at {problem.parameter} = {bound:.9g}"
+            return points, None, f"left the range at {problem.parameter} = {bound:.9g}"
         b.arclength = a.arclength + ds
         points.append(b)
         if b.arclength > 4 * ds and any(_passes(phase, a.z, b.z) for phase in phases):
-            return points, (f"closed on itself at {problem.parameter} = "
-                            f"{problem.lam(b.z):.9g} (an isola or a loop)")
+            return points, None, (f"closed on itself at {problem.parameter} = "
+                                  f"{problem.lam(b.z):.9g} (an isola or a loop)")
         a = b
         easy = turn < 0.3 * MAX_TURN
         ds = min(ds * (1.6 if easy else 1.0), max_step) if turn < 0.7 * MAX_TURN else 0.7 * ds
         ds = max(ds, min_step)
-    return points[:budget], "the budget of points was spent"
+    return points[:budget], None, "the budget of points was spent"
+
+
+def _half_offset(problem: _Problem, point: _Point, v: np.ndarray) -> float:
+    """The offset along ``v`` (scaled) of ``point``'s orbit (of an even number of periods)
+    after half its periods from its start (scaled): the doubled orbit's signed distance
+    from the orbit it doubles."""
+    half = problem.phases(point.z, point.period // 2, point.state)[-1] / problem.scale
+    return float(v @ (half - point.z[:problem.D]))
 
 
 def _collapsed(problem: _Problem, point: _Point) -> bool:
@@ -838,6 +871,7 @@ def _doubled(problem: _Problem, point: _Point, step: float):
     if head is None:
         return None
     head.tangent = problem.tangent(head.jacobian, direction)
+    head.doubling, head.born = direction[:problem.D], problem.lam(point.z)
     return head
 
 

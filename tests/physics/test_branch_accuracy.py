@@ -310,6 +310,13 @@ def test_doubled_branches_meet_the_accuracy_target():
     assert "back on a period-4 orbit" in ds.attrs["ends"]  # (period-8 branches that met it)
     branches = ds["branch"].values
     doublings = ds["frequency"].values[ds["bifurcation"].values == PERIOD_DOUBLING]
+    # each doubled branch is followed once: no doubling located twice (the period-4 branch
+    # between the period-2 branch's two doublings was followed from each, once round its
+    # loop, and the period-8 branch born on it twice: 228 points, 143.424 and 135.832 Hz
+    # three times each)
+    located = np.sort(doublings)
+    assert np.all(np.diff(located) > 1e-6 * located[1:]), located
+    assert sorted(set(ds["orbit_period"].values)) == [1, 2, 4, 8]
     heads = [np.flatnonzero(branches == n)[0] for n in np.unique(branches)[1:]]
     born = [np.min(np.abs(doublings - float(ds["frequency"][i]))) for i in heads]
     i = heads[int(np.argmin(born))]
