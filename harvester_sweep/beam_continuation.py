@@ -461,7 +461,9 @@ def _relocated(f: _Map, u, t, test):
             ends.append((end, jac, _tangent(jac, t)))
         (a, ja, ta), (b, jb, tb) = ends
         if test(f, a, ja, ta) * test(f, b, jb, tb) < 0:
-            return _locate(f, a, t, float(t @ (b - a)), test)[1]
+            # (along a's own tangent: the bisection's sign is the test's at its start, and
+            # a fold's test, the tangent's parameter component, is about 0 along t)
+            return _locate(f, a, ta, float(ta @ (b - a)), test)[1]
         w *= RELOCATE_GROWTH
     return None
 
