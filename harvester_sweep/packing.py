@@ -27,7 +27,7 @@ def pack_parameters(p: dict) -> np.ndarray:
     m = p["mass"]
     row = np.zeros(len(PARAM))
     # (the tip's forcing mu_1 A; a moving stop shares it, hence mu_1 = 1 beside one)
-    row[PARAM.amplitude] = forcing_amplitude(p)
+    row[PARAM.amplitude] = amplitude = forcing_amplitude(p)
     row[PARAM.wn2] = wn * wn
     row[PARAM.cm] = 2.0 * p["damping_ratio"] * wn
     row[PARAM.thm] = p["coupling"] / m
@@ -40,7 +40,7 @@ def pack_parameters(p: dict) -> np.ndarray:
     row[PARAM.steps] = p["steps_per_period"]
     row[PARAM.max_periods] = 0.0 if refusal(p) else p["max_periods"]
     row[PARAM.tolerance] = p["settle_tolerance"]
-    static = forcing_amplitude(p) / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
+    static = amplitude / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
     row[PARAM.x_limit] = 1e3 * (abs(p["gap"]) + static + 1e-9)
     row[PARAM.locate] = 1.0 if p["locate_switches"] else 0.0
     w = 2.0 * math.pi * p["frequency"]

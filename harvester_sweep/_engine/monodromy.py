@@ -35,6 +35,46 @@ def _product(a, b, out):
             out[i, j] = total
 
 
+@njit(inline="always", **JIT)
+def _product3(a, b, out):
+    """:func:`_product` of 3 x 3 matrices, written out: the same sums, so the same bits."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+
+
+@njit(**JIT)
+def _power3(step, power, out):
+    """out = step ** power of a 3 x 3 ``step`` (overwritten) by repeated squaring: the
+    tip-mass model's, written out, in a function of its own (compiled beside the loops of
+    :func:`_power`, the same products took twice the time, a few per cent of a sweep whose
+    points mostly stay clear of the stop)."""
+    result, scratch = np.eye(3), np.empty((3, 3))
+    while power > 0:
+        if power & 1:
+            _product3(result, step, scratch)
+            result, scratch = scratch, result
+        _product3(step, step, scratch)
+        step, scratch = scratch, step
+        power >>= 1
+    out[:, :] = result
+
+
+@njit(**JIT)
+def _power(step, power, out):
+    """out = step ** power of a square ``step`` (overwritten) by repeated squaring."""
+    size = step.shape[0]
+    result, scratch = np.eye(size), np.empty((size, size))
+    while power > 0:
+        if power & 1:
+            _product(result, step, scratch)
+            result, scratch = scratch, result
+        _product(step, step, scratch)
+        step, scratch = scratch, step
+        power >>= 1
+    out[:, :] = result
+
+
 @njit(**JIT)
 def free_monodromy(rows, steps, periods, out):
     """Write into ``out`` (n, D, D) the monodromy of ``periods[i]`` periods at ``steps[i]``
@@ -47,16 +87,10 @@ def free_monodromy(rows, steps, periods, out):
                           r[PARAM.irc], r[PARAM.thc])
         size = d.shape[0]  # the model's state (the map's columns add the forcing phase)
         step = np.eye(size) + d[:, :size]
-        result, scratch = np.eye(size), np.empty((size, size))
-        power = int(s) * int(periods[i])
-        while power > 0:
-            if power & 1:
-                _product(result, step, scratch)
-                result, scratch = scratch, result
-            _product(step, step, scratch)
-            step, scratch = scratch, step
-            power >>= 1
-        out[i] = result
+        if size == 3:
+            _power3(step, int(s) * int(periods[i]), out[i])
+        else:
+            _power(step, int(s) * int(periods[i]), out[i])
 
 
 @njit(**JIT)
@@ -70,19 +104,49 @@ def free_extent(rows, states, steps, out):
         d = free_step_map(r[PARAM.period] / steps, math.cos(math.pi / steps),
                           math.sin(math.pi / steps), r[PARAM.amplitude], r[PARAM.wn2],
                           r[PARAM.cm], r[PARAM.thm], r[PARAM.irc], r[PARAM.thc])
-        c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
         size = d.shape[0]  # the model's state, first in layouts.STATE
-        y, dy = states[i, :size].copy(), np.empty(size)
-        s, c = math.sin(r[PARAM.phase]), math.cos(r[PARAM.phase])
-        high = low = y[STATE.x]
-        for _ in range(steps):
-            for row in range(size):  # the map's columns: the state, then sin and cos
-                total = d[row, 0] * y[0] + d[row, 1] * y[1]  # (as _product)
-                for col in range(2, size):
-                    total += d[row, col] * y[col]
-                dy[row] = total + d[row, size] * s + d[row, size + 1] * c
-            for row in range(size):
-                y[row] += dy[row]
-            s, c = s * c2 + c * s2, c * c2 - s * s2
-            high, low = max(high, y[STATE.x]), min(low, y[STATE.x])
-        out[i, 0], out[i, 1] = high, low
+        y = states[i, :size].copy()
+        if size == 3:  # (as _power3: the tip-mass model's, written out, apart)
+            out[i, 0], out[i, 1] = _extent3(d, y, r[PARAM.phase], steps)
+        else:
+            out[i, 0], out[i, 1] = _extent(d, y, r[PARAM.phase], steps)
+
+
+@njit(**JIT)
+def _extent3(d, y, phase, steps):
+    """:func:`_extent` of a 3-component state, written out: the same sums."""
+    c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
+    x, v, V = y[0], y[1], y[2]
+    s, c = math.sin(phase), math.cos(phase)
+    high = low = x
+    for _ in range(steps):
+        dx = d[0, 0] * x + d[0, 1] * v + d[0, 2] * V + d[0, 3] * s + d[0, 4] * c
+        dv = d[1, 0] * x + d[1, 1] * v + d[1, 2] * V + d[1, 3] * s + d[1, 4] * c
+        de = d[2, 0] * x + d[2, 1] * v + d[2, 2] * V + d[2, 3] * s + d[2, 4] * c
+        x, v, V = x + dx, v + dv, V + de
+        s, c = s * c2 + c * s2, c * c2 - s * s2
+        high, low = max(high, x), min(low, x)
+    return high, low
+
+
+@njit(**JIT)
+def _extent(d, y, phase, steps):
+    """The largest and smallest x [m] of ``y`` (layouts.STATE; overwritten) at the step
+    ends of ``steps`` steps of the contact-free step's increments ``d`` (its columns: the
+    state, then the forcing's sin and cos), from forcing phase ``phase``."""
+    c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
+    size = y.shape[0]
+    dy = np.empty(size)
+    s, c = math.sin(phase), math.cos(phase)
+    high = low = y[STATE.x]
+    for _ in range(steps):
+        for row in range(size):
+            total = d[row, 0] * y[0] + d[row, 1] * y[1]  # (as _product)
+            for col in range(2, size):
+                total += d[row, col] * y[col]
+            dy[row] = total + d[row, size] * s + d[row, size + 1] * c
+        for row in range(size):
+            y[row] += dy[row]
+        s, c = s * c2 + c * s2, c * c2 - s * s2
+        high, low = max(high, y[STATE.x]), min(low, y[STATE.x])
+    return high, low
