@@ -173,7 +173,7 @@ def sweep_estimate(spec, remaining: int, threads: int) -> RunEstimate:
     LONG_RUN_SECONDS at BOUND_RATE on one thread) is not sampled, and says its size alone
     (``seconds`` and ``steps`` NaN)."""
     threads = max(1, threads)
-    if 0 < spec.n_points < SAMPLED_GRID:
+    if remaining > 0 and spec.n_points < SAMPLED_GRID:
         points = [spec.point_parameters(spec.values_at(i)) for i in range(spec.n_points)]
         with warnings.catch_warnings():  # (a StabilityWarning is the run's to give, once)
             warnings.simplefilter("ignore")
