@@ -3,7 +3,8 @@
 There the model is linear and so is its RK4 step (tip_mass.free_step_map): deviations of
 the model's state are carried by the step's matrix ``I + D`` (D's first columns, one for
 each component), and over ``N`` steps by its power, taken here by repeated squaring
-(:func:`free_monodromy`); the sizes are the map's, so the code holds for any state size.
+(:func:`free_monodromy`). The state's size is the model's (:data:`SIZE`): a 3-state
+model's loops are written out, any other size takes the generic ones.
 The orbit solver uses it as the Jacobian of Newton's first run where that run is expected
 to stay clear of the stops, and :func:`free_extent` (the linear motion over one period at
 a coarse step) as that expectation for a motion no run has taken yet.
@@ -17,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..jit import JIT
+from ..models import tip_mass
 from ..models.tip_mass import free_step_map
 from .layouts import PARAM, STATE
 
@@ -35,29 +37,20 @@ def _product(a, b, out):
             out[i, j] = total
 
 
+#: The size of the state the contact-free step carries: the model's (tip_mass.STATE). A
+#: compile-time constant: numba prunes the branches of the other sizes, so that a 3-state
+#: model compiles only its own loops, written out. (Compiled beside the generic loops, even
+#: untaken, the 3 x 3 squarings ran far slower, and both cost compile time:
+#: benchmarks/results/structure_42_final.md.)
+SIZE = len(tip_mass.STATE)
+
+
 @njit(inline="always", **JIT)
 def _product3(a, b, out):
     """:func:`_product` of 3 x 3 matrices, written out: the same sums, so the same bits."""
     for i in range(3):
         for j in range(3):
             out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
-
-
-@njit(**JIT)
-def _power3(step, power, out):
-    """out = step ** power of a 3 x 3 ``step`` (overwritten) by repeated squaring: the
-    tip-mass model's, written out, in a function of its own (compiled beside the loops of
-    :func:`_power`, the same products took twice the time, a few per cent of a sweep whose
-    points mostly stay clear of the stop)."""
-    result, scratch = np.eye(3), np.empty((3, 3))
-    while power > 0:
-        if power & 1:
-            _product3(result, step, scratch)
-            result, scratch = scratch, result
-        _product3(step, step, scratch)
-        step, scratch = scratch, step
-        power >>= 1
-    out[:, :] = result
 
 
 @njit(**JIT)
@@ -85,12 +78,20 @@ def free_monodromy(rows, steps, periods, out):
         d = free_step_map(r[PARAM.period] / s, math.cos(math.pi / s), math.sin(math.pi / s),
                           r[PARAM.amplitude], r[PARAM.wn2], r[PARAM.cm], r[PARAM.thm],
                           r[PARAM.irc], r[PARAM.thc])
-        size = d.shape[0]  # the model's state (the map's columns add the forcing phase)
-        step = np.eye(size) + d[:, :size]
-        if size == 3:
-            _power3(step, int(s) * int(periods[i]), out[i])
+        step = np.eye(SIZE) + d[:, :SIZE]  # (the map's columns add the forcing phase)
+        power = int(s) * int(periods[i])
+        if SIZE == 3:  # (the tip-mass model's, written out here: see SIZE)
+            result, scratch = np.eye(3), np.empty((3, 3))
+            while power > 0:
+                if power & 1:
+                    _product3(result, step, scratch)
+                    result, scratch = scratch, result
+                _product3(step, step, scratch)
+                step, scratch = scratch, step
+                power >>= 1
+            out[i] = result
         else:
-            _power(step, int(s) * int(periods[i]), out[i])
+            _power(step, power, out[i])
 
 
 @njit(**JIT)
@@ -104,29 +105,21 @@ def free_extent(rows, states, steps, out):
         d = free_step_map(r[PARAM.period] / steps, math.cos(math.pi / steps),
                           math.sin(math.pi / steps), r[PARAM.amplitude], r[PARAM.wn2],
                           r[PARAM.cm], r[PARAM.thm], r[PARAM.irc], r[PARAM.thc])
-        size = d.shape[0]  # the model's state, first in layouts.STATE
-        y = states[i, :size].copy()
-        if size == 3:  # (as _power3: the tip-mass model's, written out, apart)
-            out[i, 0], out[i, 1] = _extent3(d, y, r[PARAM.phase], steps)
+        if SIZE == 3:  # (the tip-mass model's, written out here: see SIZE)
+            c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
+            x, v, V = states[i, STATE.x], states[i, STATE.v], states[i, STATE.voltage]
+            s, c = math.sin(r[PARAM.phase]), math.cos(r[PARAM.phase])
+            high = low = x
+            for _ in range(steps):
+                dx = d[0, 0] * x + d[0, 1] * v + d[0, 2] * V + d[0, 3] * s + d[0, 4] * c
+                dv = d[1, 0] * x + d[1, 1] * v + d[1, 2] * V + d[1, 3] * s + d[1, 4] * c
+                de = d[2, 0] * x + d[2, 1] * v + d[2, 2] * V + d[2, 3] * s + d[2, 4] * c
+                x, v, V = x + dx, v + dv, V + de
+                s, c = s * c2 + c * s2, c * c2 - s * s2
+                high, low = max(high, x), min(low, x)
+            out[i, 0], out[i, 1] = high, low
         else:
-            out[i, 0], out[i, 1] = _extent(d, y, r[PARAM.phase], steps)
-
-
-@njit(**JIT)
-def _extent3(d, y, phase, steps):
-    """:func:`_extent` of a 3-component state, written out: the same sums."""
-    c2, s2 = math.cos(2.0 * math.pi / steps), math.sin(2.0 * math.pi / steps)
-    x, v, V = y[0], y[1], y[2]
-    s, c = math.sin(phase), math.cos(phase)
-    high = low = x
-    for _ in range(steps):
-        dx = d[0, 0] * x + d[0, 1] * v + d[0, 2] * V + d[0, 3] * s + d[0, 4] * c
-        dv = d[1, 0] * x + d[1, 1] * v + d[1, 2] * V + d[1, 3] * s + d[1, 4] * c
-        de = d[2, 0] * x + d[2, 1] * v + d[2, 2] * V + d[2, 3] * s + d[2, 4] * c
-        x, v, V = x + dx, v + dv, V + de
-        s, c = s * c2 + c * s2, c * c2 - s * s2
-        high, low = max(high, x), min(low, x)
-    return high, low
+            out[i, 0], out[i, 1] = _extent(d, states[i, :SIZE].copy(), r[PARAM.phase], steps)
 
 
 @njit(**JIT)
