@@ -220,28 +220,16 @@ def _peak(s, z, t0, lo, hi, omega, lam, pen, pl, pl2, pen_p, pab, gap, zero, buf
     return hi, d
 
 
-@njit(**JIT)
-def _weights(lam, pen, pen_p, omega, tau, wk, wp, D, S):
-    """The bound's weights over a contact-free span of tau [s]: wk[s, k] = |pen[s, k]|
-    min(|lam_k|^2 tau^2 / 8, 2), wp[s] = |pen_p[s]| omega^2 tau^2 / 8. A component
-    Re(a e^{lam s}) (|e^{lam s}| <= 1) departs from its chord over the span by at most
-    |a| min(|lam|^2 tau^2 / 8, 2), the particular solution's by |pen_p| omega^2 tau^2 / 8."""
+@njit(inline="always", **JIT)
+def _rise(s, z, tau, omega, lam, pen, pen_p, D):
+    """The most the penetration of surface s can rise above its chord over a contact-free
+    span of tau [s] from z at its start: a component Re(a e^{lam t}) (|e^{lam t}| <= 1)
+    departs from its chord by at most |a| min(|lam|^2 tau^2 / 8, 2), the particular
+    solution's by |pen_p| omega^2 tau^2 / 8."""
     q = 0.125 * tau * tau
+    acc = abs(pen_p[s]) * omega * omega * q
     for k in range(D):
-        m = min(abs(lam[k]) ** 2 * q, 2.0)
-        for s in range(S):
-            wk[s, k] = abs(pen[s, k]) * m
-    for s in range(S):
-        wp[s] = abs(pen_p[s]) * omega * omega * q
-
-
-@njit(**JIT)
-def _slack(s, z, wk, wp, D):
-    """The most the penetration of surface s can rise above the chord between a span's
-    ends, along the contact-free flow from z at the span's start (weights of _weights)."""
-    acc = wp[s]
-    for k in range(D):
-        acc += wk[s, k] * abs(z[k])
+        acc += abs(pen[s, k]) * min(abs(lam[k]) ** 2 * q, 2.0) * abs(z[k])
     return acc
 
 
@@ -275,27 +263,23 @@ def _leave(s, z, t0, lo, hi, c_lo, omega, lam, pen, pl, pen_p, gap, ch, buf, D):
 
 @njit(**JIT)
 def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, pl2, pen_p,
-            pab, gap, ch, zero, buf, work, stack, D, S):
+            pab, gap, ch, zero, buf, stack, D, S):
     """The first entry of surface s into contact (penetration and clip both > 0) inside a
     contact-free step of tau [s] from z at t0 that the step's ends do not show: a rod
     ringing faster than the grid can touch and leave within one step.
 
     The step is halved where the bound on the penetration (the larger end value plus
-    _weights' excursion over the piece) does not rule out a touch, down to pieces of
+    _rise over the piece) does not rule out a touch, down to pieces of
     1 / PIECES of a cycle of the fastest component, where the step's own rules apply:
     contact at a piece's end, or a rise and fall whose maximum (_peak) is above zero.
     After a clip, a piece the surface leaves is searched for the clip's return above
     zero before it does. Pieces are visited in time order; from the one that reaches
     ``limit`` [s] on they are left (a touch the step's rules found there stands).
-    Returns (tau of the entry [s], kind), tau = -1 for none. ``work`` (2, D), ``stack``
-    (DEPTH, 8): room."""
+    Returns (tau of the entry [s], kind), tau = -1 for none. ``stack`` (DEPTH, 8): room."""
     fast = 0.0
     for k in range(D):
-        work[0, k] = abs(pen[s, k] * z[k])
-        work[1, k] = abs(lam[k]) ** 2
-        if work[0, k] > 0.0:
+        if pen[s, k] * z[k] != 0.0:
             fast = max(fast, abs(lam[k]))
-    ppart = abs(pen_p[s]) * omega * omega
     leaf = 2.0 * math.pi / (PIECES * fast) if fast > 0.0 else tau
     stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0.0, d0, r0, c0
     stack[0, 4], stack[0, 5], stack[0, 6], stack[0, 7] = tau, d1, r1, c1
@@ -306,11 +290,7 @@ def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, p
         b, db, rb, cb = stack[n, 4], stack[n, 5], stack[n, 6], stack[n, 7]
         if a >= limit:
             return -1.0, TOUCH
-        q = 0.125 * (b - a) * (b - a)
-        bound = max(da, db) + ppart * q
-        for k in range(D):
-            bound += work[0, k] * min(work[1, k] * q, 2.0)
-        if bound <= 0.0:
+        if max(da, db) + _rise(s, z, b - a, omega, lam, pen, pen_p, D) <= 0.0:
             continue
         if b - a <= leaf or n + 2 > stack.shape[0]:
             if b >= limit:
@@ -478,10 +458,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     # the bound on a surface's rise above its chord over a grid step, taken once per
     # contact-free stretch (|z_k| only decays along it): where it cannot rule out a touch,
     # the step is searched in pieces (_hidden)
-    wk, wp, slack = np.empty((S, D)), np.empty(S), np.empty(S)
-    _weights(lam, pen, pen_p, omega, h, wk, wp, D, S)
+    slack = np.empty(S)
     fresh = True
-    work, stack = np.empty((2, D)), np.empty((DEPTH, 8))
+    stack = np.empty((DEPTH, 8))
     sub1 = np.empty((GRADES + 1, D), np.complex128)
     subh = np.empty((GRADES + 1, D), np.complex128)
     for g in range(GRADES + 1):
@@ -526,7 +505,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     _flow(lam, z, tau, zn, D)
                 if fresh:
                     for s in range(S):
-                        slack[s] = _slack(s, z, wk, wp, D)
+                        slack[s] = _rise(s, z, h, omega, lam, pen, pen_p, D)
                     fresh = False
                 best, bkind, bs = tau, 0, -1
                 for s in range(S):
@@ -565,7 +544,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     if max(d0, d1) + slack[s] > 0.0:  # a touch the ends may not show
                         found, kind = _hidden(s, z, t, tau, mine, d0, r0, c0, d1, r1, c1,
                                               omega, lam, pen, pl, pl2, pen_p, pab, gap, ch,
-                                              zero, buf, work, stack, D, S)
+                                              zero, buf, stack, D, S)
                         if found >= 0.0 and (found < best or bs < 0) and (
                                 kind != TOUCH or found > floor):
                             best, bkind, bs = found, kind, s
