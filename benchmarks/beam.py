@@ -33,19 +33,15 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import platform
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from benchmarks.cases import GRID
-from benchmarks.variants import cpu_model
+from benchmarks.variants import provenance
 from harvester_sweep import modal_map
 from harvester_sweep.beam_packing import pack_beam
 from harvester_sweep.beam_parameters import resolve_beam_parameters
@@ -328,13 +324,9 @@ def main(argv=None) -> None:
         modes, frequencies, rounds = range(1, 9), FREQUENCIES, ROUNDS
         periods, tolerances, limit, stride = SCIPY_PERIODS, TOLERANCES, SCIPY_LIMIT, 8
     command = "python -m benchmarks.beam" + (" --quick" if args.quick else "")
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                            capture_output=True, text=True).stdout.strip()
     head = ["# The beam: cost against modes, against SciPy, and the 64 x 64 grid", "",
             f"Command: `{command}` (benchmarks/beam.py; its docstring says what each table "
-            f"measures). Commit {commit} with the working tree's changes. CPU: "
-            f"{cpu_model()}; {os.cpu_count()} cores, numba {numba.__version__} on "
-            f"{numba.config.NUMBA_NUM_THREADS} threads; Python {platform.python_version()}. "
+            f"measures). {provenance()} (With the working tree's changes.) "
             "The machine is shared with other engineers' work: absolute times vary from run "
             f"to run, the ratios within a table are taken in the same run. Best of "
             f"{rounds} runs after an uncounted one (the grid: one run).", ""]

@@ -17,17 +17,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
-import subprocess
 import tempfile
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 
 from benchmarks.cases import GRID
-from benchmarks.variants import cpu_model
+from benchmarks.variants import provenance
 from harvester_sweep.beam_cluster import run_beam_file
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -66,13 +63,9 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     command = "python -m benchmarks.beam_grid" + ("" if args.stops == "rigid,rod" else
                                                    f" --stops {args.stops}")
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                            capture_output=True, text=True).stdout.strip()
     lines = ["# The beam's 64 x 64 grid, run whole", "",
              f"Command: `{command}` (benchmarks/beam_grid.py; its docstring says what is "
-             f"measured). Commit {commit}. CPU: {cpu_model()}; {os.cpu_count()} cores, "
-             f"numba {numba.__version__} on {numba.config.NUMBA_NUM_THREADS} threads; "
-             f"Python {platform.python_version()}. One run per stop.", "",
+             f"measured). {provenance()} One run per stop.", "",
              "| stop | points | max_periods | wall time [s] | CPU / wall | ms / point | "
              "not settled | their share of periods_run | mean periods_run | settled above "
              "1e-7 | load average before, after |",

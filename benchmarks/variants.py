@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import platform
 import subprocess
 import time
@@ -63,6 +64,19 @@ def cpu_model() -> str:
                     if line.startswith("Model name"))
     except (OSError, StopIteration):
         return platform.processor() or "unknown"
+
+
+def provenance() -> str:
+    """Where a result was measured: the commit, the CPU (lscpu), its cores, numba and its
+    threads, Python."""
+    root = Path(__file__).resolve().parents[1]
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root,
+                            capture_output=True, text=True).stdout.strip()
+    import numba
+
+    return (f"Commit {commit}. CPU: {cpu_model()}; {os.cpu_count()} cores, numba "
+            f"{numba.__version__} on {numba.config.NUMBA_NUM_THREADS} threads; Python "
+            f"{platform.python_version()}.")
 
 
 def report(lines: list, output=None) -> None:
