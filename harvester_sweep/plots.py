@@ -665,11 +665,12 @@ def _plot_lines(ds, axis: str, scales=None) -> Figure:
     return fig
 
 
-def _mesh(ax, ds, field, x_name: str, y_name: str, scales, **style):
+def _mesh(ax, ds, field, x_name: str, y_name: str, scales, status=None, **style):
     """``field`` over two grid axes as cells centred on the grid values (in log space on a
-    log axis), the axes in their display units and scales."""
+    log axis), the axes in their display units and scales; with ``status`` (the same
+    grid's), the cells that are not a steady state marked (_mark_unsettled)."""
     field = field.sortby([x_name, y_name]).transpose(y_name, x_name)
-    axes = []
+    axes, centres = [], []
     for name, which in ((x_name, "x"), (y_name, "y")):
         values = field[name].values
         log = _is_log(ds, name, values, scales)
@@ -677,7 +678,12 @@ def _mesh(ax, ds, field, x_name: str, y_name: str, scales, **style):
         getattr(ax, f"set_{which}label")(label)
         getattr(ax, f"set_{which}scale")("log" if log else "linear")
         axes.append(_edges(values, log) / scale)
-    return ax.pcolormesh(axes[0], axes[1], field.values, shading="flat", **style)
+        centres.append(values / scale)
+    mesh = ax.pcolormesh(axes[0], axes[1], field.values, shading="flat", **style)
+    if status is not None:
+        status = status.sortby([x_name, y_name]).transpose(y_name, x_name)
+        _mark_unsettled(ax, status.values, centres[0][None, :], centres[1][:, None])
+    return mesh
 
 
 #: How a map or a curve marks its points that are not a steady state, by status name.
@@ -707,18 +713,6 @@ def _mark_unsettled(ax, status, x, y, legend: bool = True, where: str = "") -> N
         ax.legend(fontsize="small", loc="upper right", framealpha=0.8)
 
 
-def _cell_centres(ax, field, x_name: str, y_name: str, scales, ds):
-    """The display coordinates of the cells _mesh draws for ``field`` (sorted and
-    transposed as it does)."""
-    field = field.sortby([x_name, y_name]).transpose(y_name, x_name)
-    coords = []
-    for name in (x_name, y_name):
-        values = field[name].values
-        scale = _axis(ds, name, values, _is_log(ds, name, values, scales))[0]
-        coords.append(values / scale)
-    return field, coords[0][None, :], coords[1][:, None]
-
-
 def _plot_maps(ds, axes_names: list, scales=None) -> Figure:
     """Maps of the power (else the first metric held) over two grid axes."""
     from matplotlib.colors import LogNorm
@@ -736,11 +730,9 @@ def _plot_maps(ds, axes_names: list, scales=None) -> Figure:
     scale, label = _axis(ds, name, values, log)
     for ax, direction in zip(panels, directions):
         field = ds[name].sel(direction=direction) if direction else ds[name]
-        mesh = _mesh(ax, ds, field / scale, x_name, y_name, scales, norm=norm)
-        if "status" in ds:
-            status = ds["status"].sel(direction=direction) if direction else ds["status"]
-            status, xs, ys = _cell_centres(ax, status, x_name, y_name, scales, ds)
-            _mark_unsettled(ax, status.values, xs, ys)
+        status = None if "status" not in ds else \
+            ds["status"].sel(direction=direction) if direction else ds["status"]
+        mesh = _mesh(ax, ds, field / scale, x_name, y_name, scales, status, norm=norm)
         ax.set_title(f"{name}: {direction or 'each point from rest'}", loc="left",
                      fontsize="medium")
         _no_offset(ax)
@@ -893,10 +885,9 @@ def plot_beam_sweep(ds, path=None) -> Figure:
                 norm, (scale, shown) = LogNorm(positive.min(), positive.max()), (1.0, "W")
             else:
                 norm, scale, shown = None, 1e-6, "\u00b5strain"
-            mesh = _mesh(ax, ds, part[name] / scale, x_name, y_name, None, norm=norm)
+            mesh = _mesh(ax, ds, part[name] / scale, x_name, y_name, None, part["status"],
+                         norm=norm)
             fig.colorbar(mesh, ax=ax, label=f"{name} [{shown}]")
-            status, xs, ys = _cell_centres(ax, part["status"], x_name, y_name, None, ds)
-            _mark_unsettled(ax, status.values, xs, ys)
             ax.set_title(f"{name}: {directions[0] or 'each point from its linear steady state'}",
                          loc="left", fontsize="medium")
             _no_offset(ax)
