@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import dense
 from ._engine import METRIC, N_RIGID, PARAM
 from .models import tip_mass
 
@@ -65,13 +66,13 @@ def on_its_way(t0, t1, q, y, jac, scale, floor, near=NEAR):
     d1 = norm(t1 - y, scale)
     predicted = t0 - y
     for k in range(int(q.max(initial=0))):
-        predicted = np.where((k < q)[:, None], np.einsum("nij,nj->ni", jac, predicted),
+        predicted = np.where((k < q)[:, None], dense.matvec_each(jac, predicted),
                              predicted)
     linear = norm(t1 - y - predicted, scale) <= LINEAR_REGIME * d1 + floor
     ahead = np.empty((AHEAD,) + y.shape)
-    ahead[0] = np.einsum("nij,nj->ni", jac, t1 - y)
+    ahead[0] = dense.matvec_each(jac, t1 - y)
     for k in range(1, AHEAD):
-        ahead[k] = np.einsum("nij,nj->ni", jac, ahead[k - 1])
+        ahead[k] = dense.matvec_each(jac, ahead[k - 1])
     stays = (d1 <= NEAR) & np.all(norm(ahead, scale) <= NEAR, axis=0)
     way = (d0 <= near) & linear & stays & (d0 > floor)
     return (d0 <= floor) | way

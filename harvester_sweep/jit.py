@@ -16,3 +16,8 @@ from __future__ import annotations
 
 FASTMATH = frozenset({"nsz", "arcp", "contract"})
 JIT = dict(cache=True, fastmath=set(FASTMATH), error_model="numpy")
+
+#: The orbit solver's compiled decisions (and the small dense algebra they use): plain
+#: IEEE arithmetic, no contraction or reassociation, so that an expression rounds as
+#: the same expression in numpy does.
+SOLVER_JIT = dict(cache=True, error_model="numpy")

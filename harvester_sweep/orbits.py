@@ -59,7 +59,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import period_map
+from . import dense, period_map
 from ._engine import MAX_ORBIT_PERIOD, METRIC, NO_STOP, PARAM, STATE, STATUS
 from .acceptance import (
     NEAR,
@@ -445,7 +445,7 @@ class _Points:
         looked = opening & good & touched & ((distance > NEAR) | ~converged)
         radius = np.zeros(len(idx))
         if looked.any():
-            radius[looked] = np.max(np.abs(np.linalg.eigvals(jac[looked])), axis=1)
+            radius[looked] = dense.spectral_radius_each(jac[looked])
         # (not in an attempt at the period of the stable orbit with contact the last one
         # turned away: the motion nears that orbit, and the monodromy taken off it, by a
         # multiplier near -1, may expand)
@@ -460,7 +460,7 @@ class _Points:
             d0 = norm(self.t0[idx] - (y + step), scale)
             away = later & (d0 - size > NEAR)
             if away.any():
-                radius[away] = np.max(np.abs(np.linalg.eigvals(jac[away])), axis=1)
+                radius[away] = dense.spectral_radius_each(jac[away])
                 distance = np.where(away, d0, distance)
                 far |= away
         if far.any():
@@ -553,12 +553,11 @@ class _Points:
         cond = np.full(len(idx), np.inf)
         a = np.eye(self.D) - np.where(ok[:, None, None], jac, 0.0)
         scaled = a / scale[:, :, None] * scale[:, None, :]  # (I - M) in scaled components
-        good = ok & (np.abs(np.linalg.det(scaled)) > 1e-12)
+        good = ok & (np.abs(dense.det_each(scaled)) > 1e-12)
         if good.any():
-            inverse = np.linalg.inv(scaled[good])
-            step[good] = scale[good] * np.einsum("nij,nj->ni", inverse,
-                                                 residual[good] / scale[good])
-            cond[good] = np.linalg.norm(inverse, ord=np.inf, axis=(1, 2))
+            inverse = dense.inverse_each(scaled[good])
+            step[good] = scale[good] * dense.matvec_each(inverse, residual[good] / scale[good])
+            cond[good] = dense.row_sum_norm_each(inverse)
         size = np.where(good, norm(step, scale), np.inf)
         floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
         return scale, step, size, good, floor
@@ -589,8 +588,7 @@ class _Points:
             return phases
         kept = np.zeros(len(idx), phases.dtype)
         p = self.p[idx]
-        mult = np.linalg.eigvals(jac)
-        radius = np.max(np.abs(mult), axis=1)
+        radius = dense.spectral_radius_each(jac)
         stable = radius < 1.0
         refining = self.refine[idx] > 0
         r = self.rows[idx]
@@ -741,7 +739,7 @@ class _Points:
         step = np.zeros((len(idx), self.D))
         if ok.any():
             residual = f[ok, :self.D] - self.y[idx[ok], :self.D]
-            step[ok] = np.linalg.solve(a[ok], residual[..., None])[..., 0]
+            step[ok] = dense.solve_each(a[ok], residual)
         size = np.where(ok, norm(step, self.scale[idx]), np.inf)
         with np.errstate(invalid="ignore"):
             change = np.where(ok, halving_error(self.metrics[idx], m), np.nan)

@@ -101,7 +101,7 @@ LAYERS = (
     ("version", "jit"),
     ("models",),
     ("_engine",),
-    ("contact", "materials", "linear", "bimorph", "rod"),
+    ("contact", "materials", "linear", "bimorph", "rod", "dense"),
     ("timescales",),
     ("parameters", "beam_parameters"),
     ("outputs", "packing"),
