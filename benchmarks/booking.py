@@ -22,14 +22,13 @@ import time
 from types import SimpleNamespace
 
 import numba
-import numpy as np
 
 import harvester_sweep as hs
 from benchmarks.cases import FREE, GRID, STEPS_PER_PERIOD, sweep_spec
 from benchmarks.compare import POINTS, _per_period, _points
 from benchmarks.variants import cpu_model
-from harvester_sweep import _engine, orbits, period_map
-from harvester_sweep._engine import METRIC, PARAM
+from harvester_sweep import _engine, orbits, results
+from harvester_sweep._engine import PARAM
 from harvester_sweep.packing import initial_state, pack_parameters
 from harvester_sweep.sweep_file import METRIC_OUTPUTS
 
@@ -43,44 +42,29 @@ def _sweep_rate(outputs) -> float:
 
 
 def _shares(grid, estimate: str) -> dict:
-    """Fractions of a sweep's RK4 steps run by the Newton iterates, their perturbed copies
-    and the rest (motion, estimates), counted at period_map's engine call, round by round of
-    the orbit solver.
-
-    In a round (orbits._Points.round) the Newton iterates' requests come first, with their
-    copies or alone (a chord step), then the motion's and the estimates'; a copy is a lane
-    that books nothing (PARAM.book 0, period_map.Batch.add). So of the lanes that book, the
-    first as many as the points in phase _NEWTON are the iterates.
-    """
+    """Fractions of a sweep's RK4 steps run by the Newton iterates (their centre lanes),
+    their perturbed copies and the rest (motion, estimates), as the orbit solver books
+    them (``orbits.WORK``), from every solve of the sweep (``results.solve_orbits``
+    wrapped)."""
     counts = dict.fromkeys(("Newton iterates", "perturbed copies", "motion and estimates"), 0.0)
-    solve_round, run = orbits._Points.round, period_map._engine.run_points
-    iterates = [0]  # points in phase _NEWTON in the round running (0 outside a round)
+    solve = results.solve_orbits
+    kinds = dict(zip(orbits.WORK, ("motion and estimates", "Newton iterates",
+                                   "perturbed copies", "perturbed copies",
+                                   "motion and estimates")))
 
-    def counted_run(rows, states, metrics, strobes, **options):
-        run(rows, states, metrics, strobes, **options)
-        steps = metrics[:, METRIC.periods_run] * rows[:, PARAM.steps]
-        copy = rows[:, PARAM.book] == 0.0
-        own = np.flatnonzero(~copy)
-        counts["Newton iterates"] += steps[own[:iterates[0]]].sum()
-        counts["perturbed copies"] += steps[copy].sum()
-        counts["motion and estimates"] += steps[own[iterates[0]:]].sum()
+    def counted(*args, **kwargs):
+        out = solve(*args, **kwargs)
+        for kind, steps in zip(orbits.WORK, out.work_by_kind.sum(axis=0)):
+            counts[kinds[kind]] += float(steps)
+        return out
 
-    def counted_round(self):
-        iterates[0] = int((self.phase == orbits._NEWTON).sum())
-        try:
-            return solve_round(self)
-        finally:
-            iterates[0] = 0
-
-    orbits._Points.round = counted_round
-    period_map._engine.run_points = counted_run
+    results.solve_orbits = counted
     try:
         spec = sweep_spec(grid)
         spec["sweep"]["error_estimate"] = estimate
         hs.run_sweep(spec, None, progress=False)
     finally:
-        orbits._Points.round = solve_round
-        period_map._engine.run_points = run
+        results.solve_orbits = solve
     total = sum(counts.values())
     return {name: n / total for name, n in counts.items()}
 

@@ -14,12 +14,10 @@ steps. This benchmark counts each, in forcing periods at the point's own steps p
 - the 64 x 64 grid at the automatic step with an error estimate on every point (the
   preset's accuracy, 1e-7).
 
-The periodic-orbit solver (``orbits``) adds its requests to a ``period_map.Batch`` in one
-order each round: the Newton iterates with copies (forward, then central differences), the
-chord steps, the pieces of trajectory, the error estimate's runs. The counts are read from
-that order, by wrapping ``Batch`` (the solver is not changed); each request's centre lanes
-and copies apart. A sweep's run-time estimate solves a sample of its points first: it is
-run once before the counting, and its sample (kept per process) is not counted.
+The periodic-orbit solver books each point's steps by kind (``orbits.WORK``), read here
+from every solve a sweep makes (``results.solve_orbits`` wrapped; the solver is not
+changed). A sweep's run-time estimate solves a sample of its points first: it is run once
+before the counting, and its sample (kept per process) is not counted.
 """
 
 from __future__ import annotations
@@ -31,57 +29,37 @@ import numpy as np
 
 from benchmarks.cases import GRID, HALF, sweep_spec
 from benchmarks.variants import cpu_model, report
-from harvester_sweep import packing, parameters, period_map, results, run_sweep
+from harvester_sweep import orbits, packing, parameters, results, run_sweep
 
-#: What a request of a round is, by its place from the end of the round's requests.
-LAST = ("estimate", "trajectory", "chord")
 KINDS = ("trajectory", "Newton centre (copies' and chord steps)", "forward copies",
          "central copies", "error estimate (twice the steps)")
+assert len(KINDS) == len(orbits.WORK)
 
 
 class Tally:
-    """Wraps period_map.Batch while active: RK4 steps of every request, by kind."""
+    """Wraps results.solve_orbits while active: the RK4 steps of every solve, by kind, and
+    the rounds (engine calls) of the solves."""
 
     def __init__(self):
         self.steps = collections.Counter()
         self.rounds = 0
 
     def __enter__(self):
-        tally, add, run = self, period_map.Batch.add, period_map.Batch.run
-        self._saved = add, run
+        tally, solve = self, results.solve_orbits
+        self._saved = solve
 
-        def counted_add(batch, rows, states, periods, steps=None, copies=None, scale=None,
-                        book=True):
-            index = add(batch, rows, states, periods, steps, copies, scale, book)
-            batch.kinds = getattr(batch, "kinds", []) + [copies]
-            return index
-
-        def counted_run(batch, settle=False):
-            kinds, batch.kinds = getattr(batch, "kinds", []), []
-            out = run(batch, settle)
-            names = [k for k in kinds[:-3]] + list(LAST[::-1])
-            if len(kinds) < 3:  # (not the orbit solver's round)
-                names = ["trajectory"] * len(kinds)
-            for name, ev in zip(names, out):
-                tally.add(name, ev)
-            tally.rounds += bool(kinds)
+        def counted(*args, **kwargs):
+            out = solve(*args, **kwargs)
+            for kind, steps in zip(KINDS, out.work_by_kind.sum(axis=0)):
+                tally.steps[kind] += float(steps)
+            tally.rounds += int(out.rounds.max(initial=0))
             return out
 
-        period_map.Batch.add, period_map.Batch.run = counted_add, counted_run
+        results.solve_orbits = counted
         return self
 
     def __exit__(self, *exc):
-        period_map.Batch.add, period_map.Batch.run = self._saved
-
-    def add(self, name: str, ev) -> None:
-        total = float(ev.work.sum())
-        if name in ("estimate", "trajectory", "chord"):
-            kind = {"estimate": KINDS[4], "trajectory": KINDS[0], "chord": KINDS[1]}[name]
-            self.steps[kind] += total
-        elif len(ev.work):  # copies of a kind: the centre lane, and the copies
-            own = total / (ev.copy_metrics.shape[1] + 1)  # (every lane runs alike)
-            self.steps[KINDS[1]] += own
-            self.steps[KINDS[2] if name == "forward" else KINDS[3]] += total - own
+        results.solve_orbits = self._saved
 
 
 def _point(accuracy: float):

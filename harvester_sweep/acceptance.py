@@ -10,15 +10,18 @@ accelerates the motion. A converged orbit is taken when the motion is proved to 
 - an orbit with contact, when the motion is in its linear regime (:func:`on_its_way`),
   within its margin from grazing a stop (:func:`reach`).
 
-Distances are relative to each component's scale (:func:`norm`).
+Distances are relative to each component's scale (:func:`norm`). Each function judges one
+point, compiled: the orbit solver calls them inside its rounds.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from . import dense
 from ._engine import METRIC, N_RIGID, PARAM
+from .jit import SOLVER_JIT
 from .models import tip_mass
 
 #: A motion is in an orbit's linear regime when the monodromy predicts its next p periods
@@ -37,26 +40,35 @@ AHEAD = 16
 PROOF_MARGIN = 1e-3
 
 
+@njit(**SOLVER_JIT)
 def norm(d, scale):
-    """Largest component of ``d`` (..., D) relative to ``scale`` (..., D) [-]."""
-    return np.max(np.abs(d) / scale, axis=-1)
+    """Largest component of ``d`` (D,) relative to ``scale`` (D,) [-]; NaN if any is."""
+    best = -np.inf
+    for c in range(d.shape[0]):
+        r = abs(d[c]) / scale[c]
+        if r != r:
+            return np.nan
+        best = max(best, r)
+    return best
 
 
-def reaches_a_stop(rows, high, low):
-    """Whether motions between x = ``low`` and ``high`` [m] (n,) come to a stop of packed
-    rows (n, len(PARAM)): to the gap of an upper stop, or to a lower one (a NaN extent
+@njit(**SOLVER_JIT)
+def reaches_a_stop(row, high, low):
+    """Whether a motion between x = ``low`` and ``high`` [m] comes to a stop of packed row
+    ``row`` (len(PARAM)): to the gap of an upper stop, or to a lower one (a NaN extent
     counts as reaching)."""
-    return (rows[:, PARAM.khm] > 0) & ~(high < rows[:, PARAM.gap]) \
-        | (rows[:, PARAM.lower_khm] > 0) & ~(low > -rows[:, PARAM.lower_gap])
+    return (row[PARAM.khm] > 0 and not high < row[PARAM.gap]) \
+        or (row[PARAM.lower_khm] > 0 and not low > -row[PARAM.lower_gap])
 
 
+@njit(**SOLVER_JIT)
 def on_its_way(t0, t1, q, y, jac, scale, floor, near=NEAR):
-    """Whether motions at ``t0`` (n, D), ``q`` (n,) maps of the period map later at ``t1``,
-    are on their way to its fixed points ``y`` (n, D) of monodromy ``jac`` (n, D, D), in
-    components relative to ``scale`` (n, D), with Newton's floor ``floor`` (n,) [-].
+    """Whether a motion at ``t0`` (D,), ``q`` maps of the period map later at ``t1``, is
+    on its way to its fixed point ``y`` (D,) of monodromy ``jac`` (D, D), in components
+    relative to ``scale`` (D,), with Newton's floor ``floor`` [-].
 
     Yes where ``t0`` is on the fixed point (within the floor), or where it is within
-    ``near`` (n,) of it (NEAR, or nearer: :func:`reach`), the monodromy predicts ``t1 - y``
+    ``near`` of it (NEAR, or nearer: :func:`reach`), the monodromy predicts ``t1 - y``
     from ``t0 - y`` to LINEAR_REGIME of its size, and the prediction from ``t1`` for AHEAD
     more maps stays within NEAR, where the linear regime was seen to hold. (A motion may
     first move away from a stable orbit, as one of a non-normal monodromy does: on its way
@@ -65,23 +77,23 @@ def on_its_way(t0, t1, q, y, jac, scale, floor, near=NEAR):
     d0 = norm(t0 - y, scale)
     d1 = norm(t1 - y, scale)
     predicted = t0 - y
-    for k in range(int(q.max(initial=0))):
-        predicted = np.where((k < q)[:, None], dense.matvec_each(jac, predicted),
-                             predicted)
+    for _ in range(q):
+        predicted = dense.matvec(jac, predicted)
     linear = norm(t1 - y - predicted, scale) <= LINEAR_REGIME * d1 + floor
-    ahead = np.empty((AHEAD,) + y.shape)
-    ahead[0] = dense.matvec_each(jac, t1 - y)
-    for k in range(1, AHEAD):
-        ahead[k] = dense.matvec_each(jac, ahead[k - 1])
-    stays = (d1 <= NEAR) & np.all(norm(ahead, scale) <= NEAR, axis=0)
-    way = (d0 <= near) & linear & stays & (d0 > floor)
-    return (d0 <= floor) | way
+    stays = d1 <= NEAR
+    ahead = t1 - y
+    for _ in range(AHEAD):
+        ahead = dense.matvec(jac, ahead)
+        stays = stays and norm(ahead, scale) <= NEAR
+    way = d0 <= near and linear and stays and d0 > floor
+    return d0 <= floor or way
 
 
+@njit(**SOLVER_JIT)
 def reach(m, scale):
-    """How near a motion must come to orbits of metric rows ``m`` (n, len(METRIC)) to be
-    in their linear regime, relative to the component scales ``scale`` (n, D) [-]: NEAR,
-    or nearer an orbit that comes near grazing a stop (GRAZING times the margin).
+    """How near a motion must come to an orbit of metric row ``m`` (len(METRIC)) to be in
+    its linear regime, relative to the component scales ``scale`` (D,) [-]: NEAR, or
+    nearer an orbit that comes near grazing a stop (GRAZING times the margin).
 
     The period map is smooth only as long as the motion makes the orbit's contacts and no
     other: a motion farther from the orbit than the top of one of its swings is from the
@@ -89,25 +101,26 @@ def reach(m, scale):
     its slowest impact would carry a harmonic swing beyond the gap, 0.5 (v_imp / (w x))^2
     of the amplitude x (``approach_velocity_min``), may miss that impact. A stable orbit
     that grazes is then the attractor of no motion beyond that margin."""
-    with np.errstate(invalid="ignore"):
-        miss = m[:, METRIC.near_miss] / scale[:, 0]
-        overshoot = 0.5 * (m[:, METRIC.approach_velocity_min] / scale[:, 1]) ** 2
+    miss = m[METRIC.near_miss] / scale[0]
+    ratio = m[METRIC.approach_velocity_min] / scale[1]
+    overshoot = 0.5 * (ratio * ratio)
     margin = np.fmin(miss, overshoot)
-    return np.where(margin >= 0, np.minimum(GRAZING * margin, NEAR), NEAR)
+    return min(GRAZING * margin, NEAR) if margin >= 0 else NEAR
 
 
-def never_reaches(rows, high, low, e):
-    """Whether motions a deviation ``e`` (n, D) [m, m/s, V, (m, m/s)] from orbits clear of
-    the stops that reach from x = ``low`` to ``high`` [m] (n,) never reach a stop of packed
-    rows (n, len(PARAM)) either.
+@njit(**SOLVER_JIT)
+def never_reaches(row, high, low, e):
+    """Whether a motion a deviation ``e`` (D,) [m, m/s, V, (m, m/s)] from an orbit clear of
+    the stops that reaches from x = ``low`` to ``high`` [m] never reaches a stop of packed
+    row ``row`` (len(PARAM)) either.
 
     The homogeneous part of the linear motion loses energy, which bounds its excursion B
     (the model's ``excursion_bound``), so ``x(t) <= high + B`` at all later times, and
     ``x(t) >= low - B`` (a moving stop's own transient is bounded alike)."""
-    bound = tip_mass.excursion_bound(e[:, :N_RIGID], rows[:, PARAM.wn2], rows[:, PARAM.thm],
-                                     rows[:, PARAM.thc])
-    if e.shape[1] > N_RIGID:  # (a moving stop's own transient)
-        stop = tip_mass.stop_excursion_bound(e[:, N_RIGID:], rows[:, PARAM.stop_wn2])
-        bound = bound + np.where(rows[:, PARAM.stop_ratio] > 0, stop, 0.0)
-    return (high + bound + PROOF_MARGIN * (np.abs(high) + bound) < rows[:, PARAM.gap]) \
-        & (low - bound - PROOF_MARGIN * (np.abs(low) + bound) > -rows[:, PARAM.lower_gap])
+    bound = tip_mass.excursion_bound(e[0], e[1], e[2], row[PARAM.wn2], row[PARAM.thm],
+                                     row[PARAM.thc])
+    if e.shape[0] > N_RIGID:  # (a moving stop's own transient)
+        stop = tip_mass.stop_excursion_bound(e[N_RIGID], e[N_RIGID + 1], row[PARAM.stop_wn2])
+        bound = bound + (stop if row[PARAM.stop_ratio] > 0 else 0.0)
+    return high + bound + PROOF_MARGIN * (abs(high) + bound) < row[PARAM.gap] \
+        and low - bound - PROOF_MARGIN * (abs(low) + bound) > -row[PARAM.lower_gap]

@@ -10,8 +10,10 @@ solved again at the step the fourth order asks for (:func:`refined_steps`).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from ._engine import METRIC
+from .jit import SOLVER_JIT
 
 #: Re-solves at a finer step for the accuracy target [-].
 REFINEMENTS = 3
@@ -23,38 +25,43 @@ SLOW_ORDER = 2.0
 STEPS_QUANTUM = 16
 
 
-def halving_error(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
-    """Error estimate [-] of metric rows from a run and its rerun at twice the steps per
-    period (same points, engine metric rows).
+@njit(**SOLVER_JIT)
+def _change(coarse, fine, scale):
+    """|coarse - fine| / scale [-], 0 where the scale is not positive."""
+    return abs(coarse - fine) / scale if scale > 0 else 0.0
+
+
+@njit(**SOLVER_JIT)
+def _larger(a, b):
+    """The larger of a and b, NaN if either is (numpy's maximum)."""
+    return np.nan if a != a or b != b else max(a, b)
+
+
+@njit(**SOLVER_JIT)
+def halving_error(coarse, fine):
+    """Error estimate [-] of the metric row ``coarse`` of a run from the row ``fine`` of
+    its rerun at twice the steps per period (engine metric rows).
 
     The largest relative change of ``power`` and ``v_peak`` and of ``x_max`` and ``x_min``
     (relative to the displacement amplitude): with RK4's 4th order the coarse run's own
     error is about 16/15 of it.
     """
-    coarse, fine = np.asarray(coarse), np.asarray(fine)
-
-    def change(index, scale):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ratio = np.abs(coarse[..., index] - fine[..., index]) / scale
-        return np.where(scale > 0, ratio, 0.0)
-
-    amplitude = 0.5 * (fine[..., METRIC.x_max] - fine[..., METRIC.x_min])
-    return np.maximum.reduce([
-        change(METRIC.power, np.abs(fine[..., METRIC.power])),
-        change(METRIC.v_peak, np.abs(fine[..., METRIC.v_peak])),
-        change(METRIC.x_max, amplitude),
-        change(METRIC.x_min, amplitude),
-    ])
+    amplitude = 0.5 * (fine[METRIC.x_max] - fine[METRIC.x_min])
+    out = _change(coarse[METRIC.power], fine[METRIC.power], abs(fine[METRIC.power]))
+    out = _larger(out, _change(coarse[METRIC.v_peak], fine[METRIC.v_peak],
+                               abs(fine[METRIC.v_peak])))
+    out = _larger(out, _change(coarse[METRIC.x_max], fine[METRIC.x_max], amplitude))
+    return _larger(out, _change(coarse[METRIC.x_min], fine[METRIC.x_min], amplitude))
 
 
-def refined_steps(steps, errors, target, coarser, refine):
-    """Steps per period (n,) to solve again at for error estimates ``errors`` (n,) [-] at
-    ``steps`` (n,) to meet ``target`` (n,) [-]: the fourth order's ask with a margin of
-    1.1, or twice the steps after a re-solve (``refine`` > 0) whose estimate fell slower
-    than SLOW_ORDER from the last one's, ``coarser`` (n, 2): its steps and estimate."""
-    want = np.ceil(steps * (errors / target) ** 0.25 * 1.1 / STEPS_QUANTUM) * STEPS_QUANTUM
-    before, error = coarser.T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        order = np.log(error / errors) / np.log(steps / before)
-    slow = (refine > 0) & ~(order >= SLOW_ORDER)
-    return np.where(slow, 2 * steps, want)
+@njit(**SOLVER_JIT)
+def refined_steps(steps, error, target, before, before_error, refine):
+    """Steps per period to solve again at for an error estimate ``error`` [-] at ``steps``
+    to meet ``target`` [-]: the fourth order's ask with a margin of 1.1, or twice the
+    steps after a re-solve (``refine`` > 0) whose estimate fell slower than SLOW_ORDER
+    from the last one's, ``before_error`` at ``before`` steps per period."""
+    want = np.ceil(steps * (error / target) ** 0.25 * 1.1 / STEPS_QUANTUM) * STEPS_QUANTUM
+    order = np.log(before_error / error) / np.log(steps / before)
+    if refine > 0 and not order >= SLOW_ORDER:
+        return 2.0 * steps
+    return want

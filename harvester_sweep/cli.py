@@ -275,11 +275,11 @@ _WRITTEN = []
 
 
 def _announce_compilation() -> None:
-    from .period_map import engine_ready
+    from .orbits import solver_ready
 
-    if not engine_ready():
-        print("harvester-sweep: compiling the RK4 kernel into numba's on-disk cache (first "
-              "run only, 1-2 minutes)", file=sys.stderr, flush=True)
+    if not solver_ready():
+        print("harvester-sweep: compiling the RK4 kernel and the orbit solver into numba's "
+              "on-disk cache (first run only, 1-3 minutes)", file=sys.stderr, flush=True)
 
 
 def _scene(args) -> int:

@@ -897,8 +897,9 @@ def _next_steps(steps: int, error: float, target: float, coarser, refine: int) -
     towards ``target`` [-] (accuracy.refined_steps, as for a sweep point: the fourth
     order's ask, or twice the steps after a refinement that gained less than SLOW_ORDER;
     ``coarser`` the steps and estimate before, ``refine`` the refinements so far)."""
-    want = refined_steps(np.array([float(steps)]), np.array([error]), np.array([target]),
-                         np.array([coarser], dtype=float), np.array([refine]))[0]
+    before, before_error = np.asarray(coarser, dtype=float)
+    want = refined_steps(float(steps), float(error), float(target), before, before_error,
+                         int(refine))
     return int(max(want, steps + STEPS_QUANTUM))
 
 

@@ -55,12 +55,16 @@ count or the chunking.
 
 from __future__ import annotations
 
+import sys
+from collections import namedtuple
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+from numba import njit
 
-from . import dense, period_map
-from ._engine import MAX_ORBIT_PERIOD, METRIC, NO_STOP, PARAM, STATE, STATUS
+from . import acceptance, accuracy, dense, period_map
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, NO_STOP, PARAM, STATE, STATUS, cache
 from .acceptance import (
     NEAR,
     never_reaches,
@@ -70,14 +74,16 @@ from .acceptance import (
     reaches_a_stop,
 )
 from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
+from .jit import SOLVER_JIT
 from .models import tip_mass
 from .period_map import (
+    CENTRAL,
     PERTURBATION,
     ROUNDING,
-    D,
-    contact_free_monodromy,
-    orbit_scales,
-    sane,
+    copies_monodromy,
+    free_monodromy_into,
+    run_lanes,
+    sane_run,
     sorted_multipliers,
     state_size,
 )
@@ -123,13 +129,75 @@ LOCATED = 0.05
 ESTIMATE_RUNS = 4
 SAMPLES = MAX_ORBIT_PERIOD + 1  # stroboscopic samples read back from each run
 
-# A point's phase: what its next run is (:class:`_Points`). A phase that runs has one
-# function that takes its points' runs and returns each point's next phase (_newton,
-# _transient, _estimate; _converged and _give_up return theirs for the points they are
-# handed); a point is set up for a phase's run where that next phase is chosen (_attempt,
-# _chunk, _start_estimate, _refine), and _enter moves the points on.
+# A point's phase: what its next run is. A phase that runs has one function that takes a
+# point's run and returns its next phase (_newton, _transient, _estimate; _converged and
+# _give_up return theirs for the point they are handed); a point is set up for a phase's
+# run where that next phase is chosen (_attempt, _chunk, _estimate, _refine), and _enter
+# moves it on.
 _WAITING, _NEWTON, _TRANSIENT, _ESTIMATE, _DONE = range(5)
 
+#: What a point's RK4 steps were run for (Orbits.work_by_kind): the pieces of trajectory
+#: between attempts, Newton's centre lanes (an attempt's first run, which is also the
+#: trajectory's next p periods, included), the monodromy's forward and central copies, the
+#: error estimate's runs at twice the steps.
+WORK = ("trajectory", "newton", "forward_copies", "central_copies", "estimate")
+
+#: The points of one solve, each a small state machine (its phase) advanced one round of
+#: engine runs at a time by compiled code; every array is indexed by point, and every
+#: transition acts on each point apart, so that a point's result depends on its own
+#: numbers only.
+_Points = namedtuple("_Points", (
+    "rows",  # packed parameter rows (n, len(PARAM))
+    "successors",  # the point that starts from each point's orbit, -1 for none
+    "estimated",  # given an error estimate
+    "accuracy",  # error target [-], NaN where the step was given
+    "max_steps",  # most steps per period of a re-solve
+    "phase",  # what the next run is (_WAITING ... _DONE)
+    "begin",  # start state (rest, or the predecessor's orbit) (n, len(STATE))
+    "traj",  # the trajectory's state (n, len(STATE))
+    "run",  # trajectory periods run
+    "work",  # RK4 steps taken (n, len(WORK)), by kind
+    "rounds",  # the round each point was done in
+    "calls",  # rounds run (1,)
+    "steps",  # steps per period of the runs
+    "p",  # orbit period tried
+    "y",  # Newton iterate, or the orbit under estimate (n, len(STATE))
+    "iteration",  # Newton iteration of the attempt, or run of the estimate
+    "last",  # size of the last Newton correction
+    "refine",  # re-solves at a finer step so far
+    "t0",  # trajectory state at the attempt's start (n, D)
+    "t1",  # ... and t1_periods periods later (n, D)
+    "t1_periods",
+    "orbit_steps",  # steps per period of the orbit taken
+    "floor",  # Newton's floor at the orbit taken
+    "released",  # successors started
+    "hint",  # periods the trajectory should run next (0: no idea)
+    "left",  # periods of the trajectory's chunk still to run
+    "tested",  # the engine's steady-state test passed
+    "refused",  # period of the stable orbit with contact last turned away (0: none)
+    "retry",  # the attempt is at that period
+    "scale",  # component scales (n, D)
+    "jacobian",  # monodromy of the orbit taken (n, D, D)
+    "first_jacobian",  # ... of each attempt's first run
+    "newton_jacobian",  # ... of the last copies (or the contact-free map's)
+    "chord",  # the next iterate reuses newton_jacobian
+    "affine",  # ... taken where no lane touched a stop
+    "central",  # the next copies run both ways
+    # newton_jacobian is one to judge an orbit on: by central differences, or of a map
+    # affine where it was taken (where forward differences are exact)
+    "exact",
+    # the run Newton starts from touched a stop (before any run: the linear motion's first
+    # period says whether it will)
+    "touched",
+    "recheck",  # the attempt's first run, again with copies
+    "metrics",  # metric rows of the orbit (n, len(METRIC))
+    "fine",  # ... at twice the steps
+    "strobes",  # stroboscopic samples of the last run (n, SAMPLES, D)
+    "finals",  # the state the point ended at (n, len(STATE))
+    "errors",  # step-halving error estimates [-]
+    "coarser",  # steps and error estimate of the last solve (n, 2)
+    "status",  # outcome (STATUS)
+))
 
 @dataclass
 class Orbits:
@@ -157,8 +225,9 @@ class Orbits:
         copies, error estimate and re-solves.
     rounds : numpy.ndarray
         int64 (n,): the round (engine call, counted from 1) in which the point was done,
-        0 for a point not run: how long a solve took in calls, each of which costs the
-        solver's Python besides its steps (what run_estimate counts).
+        0 for a point not run: how long a solve took in calls (what run_estimate counts).
+    work_by_kind : numpy.ndarray
+        int64 (n, len(WORK)): the RK4 steps of ``rk4_steps`` by what they were run for.
     """
 
     metrics: np.ndarray
@@ -169,6 +238,7 @@ class Orbits:
     steps: np.ndarray
     rk4_steps: np.ndarray
     rounds: np.ndarray
+    work_by_kind: np.ndarray
 
 
 def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
@@ -196,648 +266,817 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     on_points : callable, optional
         Called with the number of points newly finished after each round of runs; what it
         raises (KeyboardInterrupt included) stops the solve and is raised again.
+
+    The rounds run in compiled code: all of them in one call without ``on_points``, else
+    one a call, so that progress is told and an interrupt seen between rounds.
     """
+    rows = np.ascontiguousarray(rows, dtype=float)
+    states = np.ascontiguousarray(states, dtype=float)
     n = len(rows)
-    pts = _Points(np.asarray(rows, dtype=float), np.asarray(states, dtype=float),
+    pts = _points(rows, states,
                   np.full(n, -1) if successors is None else np.asarray(successors),
                   np.zeros(n, bool) if estimated is None else np.asarray(estimated, bool),
                   np.full(n, np.nan) if accuracy is None else np.asarray(accuracy, float),
                   np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float))
-    pts.start(np.flatnonzero(pts.heads()))
-    while not (pts.phase == _DONE).all():
-        assert ((pts.phase != _WAITING) & (pts.phase != _DONE)).any(), "no point to run"
-        done = pts.round()
-        pts.calls += 1
-        pts.rounds[(pts.phase == _DONE) & (pts.rounds == 0)] = pts.calls
+    linked = pts.successors[pts.successors >= 0]
+    heads = np.ones(n, bool)
+    heads[linked] = False
+    guessed = pts.scale.shape[1] == N_RIGID  # (a moving stop's motion is not the tip's alone)
+    extent = (period_map.contact_free_extent(rows, states, GUESS_STEPS) if guessed
+              else np.zeros((n, 2)))
+    _set_up(pts, _linear_amplitude(rows), guessed, extent, np.flatnonzero(heads))
+    threads = numba.get_num_threads()  # (read here: compiled code reading it is not cached)
+    while True:
+        done, left = _rounds(pts, threads, on_points is not None)
+        assert left >= 0, "no point to run"
         if on_points is not None and done:
             on_points(done)
-    return pts.result(samples)
+        if left == 0:
+            return _result(pts, samples)
 
 
-class _Points:
-    """The points of one solve, each a small state machine (its phase) advanced one round
-    of engine runs at a time; all arrays are indexed by point. A point's result depends on
-    its own numbers only: every transition acts on each point apart."""
+def _points(rows, states, successors, estimated, accuracy, max_steps) -> _Points:
+    """The solve's points before any run: each waiting (_WAITING)."""
+    n, size = len(rows), state_size(rows)
 
-    def __init__(self, rows, states, successors, estimated, accuracy, max_steps):
-        n = len(rows)
-        self.D = state_size(rows)
-        self.rows, self.successors, self.estimated = rows, successors, estimated
-        self.accuracy, self.max_steps = accuracy, max_steps
-        self.phase = np.full(n, _WAITING)
-        self.begin = states.copy()  # start state (rest, or the predecessor's orbit)
-        self.traj = states.copy()  # the trajectory's state
-        self.run = np.zeros(n)  # trajectory periods run
-        self.work = np.zeros(n)  # RK4 steps taken
-        self.calls = 0  # rounds run
-        self.rounds = np.zeros(n, dtype=np.int64)  # the round each point was done in
-        self.steps = rows[:, PARAM.steps].copy()
-        self.p = np.ones(n, dtype=np.int64)  # orbit period tried
-        self.y = states.copy()  # Newton iterate (or the orbit under estimate)
-        self.iteration = np.zeros(n, dtype=np.int64)
-        self.last = np.full(n, np.inf)  # size of the last Newton correction
-        self.refine = np.zeros(n, dtype=np.int64)  # re-solves at a finer step so far
-        self.t0 = states[:, :self.D].copy()  # trajectory state at the attempt's start
-        self.t1 = states[:, :self.D].copy()  # ... and t1_periods periods later
-        self.t1_periods = np.ones(n, dtype=np.int64)
-        self.orbit_steps = self.steps.copy()  # steps per period of the orbit taken
-        self.floor = np.zeros(n)  # Newton's floor at the orbit taken
-        self.released = np.zeros(n, bool)  # successors started
-        self.hint = np.zeros(n)  # periods the trajectory should run next (0: no idea)
-        self.left = np.zeros(n)  # periods of the trajectory's chunk still to run
-        self.tested = np.zeros(n, bool)  # the engine's steady-state test passed
-        # period of the stable orbit with contact last turned away (0: none)
-        self.refused = np.zeros(n, dtype=np.int64)
-        self.retry = np.zeros(n, bool)  # the attempt is at that period
-        self.scale = np.ones((n, self.D))
-        self.scale[:] = self._linear_scale()
-        self.jacobian = np.full((n, self.D, self.D), np.nan)
-        self.first_jacobian = np.full((n, self.D, self.D), np.nan)  # at each attempt's start
-        self.newton_jacobian = np.full((n, self.D, self.D), np.nan)  # at the last copies
-        self.chord = np.zeros(n, bool)  # the next iterate reuses newton_jacobian
-        self.affine = np.zeros(n, bool)  # ... taken where no lane touched a stop
-        self.central = np.zeros(n, bool)  # the next copies run both ways
-        # newton_jacobian is one to judge an orbit on: by central differences, or of a map
-        # affine where it was taken (where forward differences are exact)
-        self.exact = np.zeros(n, bool)
-        # the run Newton starts from touched a stop (before any run: the linear motion's
-        # first period says whether it will)
-        self.touched = np.zeros(n, bool)
-        if self.D == D:
-            extent = period_map.contact_free_extent(rows, states, GUESS_STEPS)
-            self.touched = reaches_a_stop(rows, extent[:, 0], extent[:, 1])
-        self.recheck = np.zeros(n, bool)  # the attempt's first run, again with copies
-        self.metrics = np.full((n, len(METRIC)), np.nan)
-        self.fine = np.full((n, len(METRIC)), np.nan)  # metrics at twice the steps
-        self.strobes = np.full((n, SAMPLES, self.D), np.nan)
-        self.finals = states.copy()
-        self.errors = np.full(n, np.nan)
-        self.coarser = np.full((n, 2), np.nan)  # steps and error estimate of the last solve
-        self.status = np.full(n, STATUS.not_settled)
+    def full(value, *shape, dtype=float):
+        return np.full((n,) + shape, value, dtype=dtype)
 
-    # -- set-up ------------------------------------------------------------------------
+    return _Points(
+        rows=rows, successors=successors.astype(np.int64), estimated=estimated,
+        accuracy=accuracy, max_steps=max_steps, phase=full(_WAITING, dtype=np.int64),
+        begin=states.copy(), traj=states.copy(), run=full(0.0), work=full(0.0, len(WORK)),
+        rounds=full(0, dtype=np.int64), calls=np.zeros(1, dtype=np.int64),
+        steps=rows[:, PARAM.steps].copy(),
+        p=full(1, dtype=np.int64), y=states.copy(), iteration=full(0, dtype=np.int64),
+        last=full(np.inf), refine=full(0, dtype=np.int64),
+        t0=states[:, :size].copy(), t1=states[:, :size].copy(),
+        t1_periods=full(1, dtype=np.int64), orbit_steps=rows[:, PARAM.steps].copy(),
+        floor=full(0.0), released=full(False, dtype=bool), hint=full(0.0), left=full(0.0),
+        tested=full(False, dtype=bool), refused=full(0, dtype=np.int64),
+        retry=full(False, dtype=bool), scale=full(1.0, size),
+        jacobian=full(np.nan, size, size), first_jacobian=full(np.nan, size, size),
+        newton_jacobian=full(np.nan, size, size), chord=full(False, dtype=bool),
+        affine=full(False, dtype=bool), central=full(False, dtype=bool),
+        exact=full(False, dtype=bool), touched=full(False, dtype=bool),
+        recheck=full(False, dtype=bool), metrics=full(np.nan, len(METRIC)),
+        fine=full(np.nan, len(METRIC)), strobes=full(np.nan, SAMPLES, size),
+        finals=states.copy(), errors=full(np.nan), coarser=full(np.nan, 2),
+        status=full(STATUS.not_settled, dtype=np.int64))
 
-    def heads(self):
-        linked = self.successors[self.successors >= 0]
-        head = np.ones(len(self.rows), bool)
-        head[linked] = False
-        return head
 
-    def _linear_scale(self):
-        """Component scales [m, m/s, V] before any run: the response without the stop (the
-        model's linear system's phasor), floored at the gap."""
-        r = self.rows
-        x = tip_mass.free_amplitude(r[:, PARAM.amplitude], 2 * np.pi / r[:, PARAM.period],
-                                    r[:, PARAM.wn2], r[:, PARAM.cm], r[:, PARAM.thm],
-                                    r[:, PARAM.irc], r[:, PARAM.thc])
-        x = np.where(np.isfinite(x), x, 0.0)
-        gap = np.where(r[:, PARAM.gap] < NO_STOP, np.abs(r[:, PARAM.gap]), 0.0)
-        x = np.maximum(x, gap * 1e-3) + 1e-30
-        return self._scales(x, 0.0)
+def _linear_amplitude(rows):
+    """Displacement amplitudes [m] of the points before any run: the response without the
+    stop (the model's linear system's phasor), floored at the gap."""
+    r = rows
+    x = tip_mass.free_amplitude(r[:, PARAM.amplitude], 2 * np.pi / r[:, PARAM.period],
+                                r[:, PARAM.wn2], r[:, PARAM.cm], r[:, PARAM.thm],
+                                r[:, PARAM.irc], r[:, PARAM.thc])
+    x = np.where(np.isfinite(x), x, 0.0)
+    gap = np.where(r[:, PARAM.gap] < NO_STOP, np.abs(r[:, PARAM.gap]), 0.0)
+    return np.maximum(x, gap * 1e-3) + 1e-30
 
-    def _scales(self, x, v_peak, index=slice(None)):
-        return orbit_scales(self.rows[index], x, v_peak, self.D)
 
-    def start(self, idx):
-        """Points ``idx`` start: refused ones are done at once (their state passes on), the
-        others make a Newton attempt from their initial state."""
-        runs = self.rows[idx, PARAM.max_periods] > 0
-        refused, going = idx[~runs], idx[runs]
-        self.metrics[refused, :METRIC.orbit_period] = np.nan
-        self.status[refused] = STATUS.too_stiff
-        self.finals[refused] = self.begin[refused]
-        self.traj[going] = self.begin[going]
-        self._attempt(going)
-        self._enter(idx, np.where(runs, _NEWTON, _DONE))
+def _result(pts: _Points, samples: int) -> Orbits:
+    n, size = pts.scale.shape
+    metrics = pts.metrics.copy()
+    settled = pts.status == STATUS.settled
+    metrics[:, METRIC.status] = pts.status
+    metrics[:, METRIC.orbit_period] = np.where(settled, pts.p, 0)
+    metrics[:, METRIC.periods_run] = pts.run
+    multipliers = np.full((n, size), np.nan + 0j)
+    if settled.any():
+        multipliers[settled] = sorted_multipliers(pts.jacobian[settled])
+    strobes = np.full((n, samples, size), np.nan)
+    age = np.arange(samples)[::-1]  # periods before the end
+    # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
+    p = np.where(settled, pts.p, SAMPLES)
+    back = np.where(settled[:, None], age[None, :] % p[:, None], age[None, :])
+    valid = back < SAMPLES
+    taken = np.take_along_axis(pts.strobes, (SAMPLES - 1 - back.clip(0, SAMPLES - 1))
+                               [..., None].repeat(size, axis=2), axis=1)
+    strobes[valid] = taken[valid]
+    work = pts.work.astype(np.int64)
+    return Orbits(metrics, strobes, pts.finals, multipliers, pts.errors,
+                  pts.orbit_steps.astype(np.int64), work.sum(axis=1), pts.rounds.copy(),
+                  work)
 
-    def _attempt(self, idx):
-        """Set up a Newton attempt from the trajectory's state (phase _NEWTON)."""
-        self.y[idx] = self.traj[idx]
-        self.t0[idx] = self.traj[idx, :self.D]
-        self.iteration[idx] = 0
-        self.last[idx] = np.inf
-        self._first_run(idx)
 
-    def _first_run(self, idx):
-        """Newton's first run from points ``idx``' iterates: where the motion was clear of
-        the stops, it is likely to be too, so its centre lane alone, with the contact-free
-        map's monodromy (run again with copies if it touched after all); else with copies."""
-        self.chord[idx] = self.central[idx] = self.exact[idx] = False
-        free = idx[~self.touched[idx]]
-        if self.D == D and free.size:  # (a moving stop's map is not the tip's alone)
-            self.chord[free] = self.affine[free] = self.exact[free] = True
-            self.newton_jacobian[free] = contact_free_monodromy(self.rows[free], self.steps[free],
-                                                        self.p[free])
+# -- compiled: set-up and rounds ---------------------------------------------------------
 
-    # -- one round ---------------------------------------------------------------------
+@njit(**SOLVER_JIT)
+def _set_up(T, amplitude, guessed, extent, heads):
+    """Each point's first scales from its amplitude ``amplitude`` [m] (the response without
+    the stop), whether its motion touches a stop in its first period (where ``guessed``:
+    from ``extent``, the linear motion's), and the lines' first points ``heads`` start."""
+    for i in range(T.rows.shape[0]):
+        period_map.point_scales(T.rows[i], amplitude[i], 0.0, T.scale[i])
+        if guessed:
+            T.touched[i] = reaches_a_stop(T.rows[i], extent[i, 0], extent[i, 1])
+    for i in heads:
+        _start(T, i)
 
-    def round(self):
-        """Run every point's next request in one engine call and act on the results;
-        returns the number of points that finished."""
-        iterate = self.phase == _NEWTON
-        copied = iterate & ~self.chord  # with the copies of the monodromy
-        forward = np.flatnonzero(copied & ~self.central)
-        central = np.flatnonzero(copied & self.central)
-        chord = np.flatnonzero(iterate & self.chord)
-        transient = np.flatnonzero(self.phase == _TRANSIENT)
-        estimate = np.flatnonzero(self.phase == _ESTIMATE)
-        batch = period_map.Batch(self.D, SAMPLES)
-        blocks = [(b, kind) for b, kind in [(forward, "forward"), (central, "central")]
-                  if b.size]
-        for b, kind in blocks:
-            batch.add(self.rows[b], self.y[b], self.p[b], self.steps[b], kind, self.scale[b])
-        batch.add(self.rows[chord], self.y[chord], self.p[chord], self.steps[chord])
-        # (no slice shorter than MAX_ORBIT_PERIOD unless the whole chunk is: see _chunk)
-        left = self.left[transient]
-        batch.add(self.rows[transient], self.traj[transient],
-                  np.where(left < SLICE + MAX_ORBIT_PERIOD, left, SLICE), self.steps[transient])
-        batch.add(self.rows[estimate], self.y[estimate], self.p[estimate],
-                  2 * self.steps[estimate])
-        # (the engine's steady-state test ends a piece of the motion that settles; it never
-        # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer
-        # than the SAMPLES periods the test waits for)
-        *copies, chords, transients, estimates = batch.run(settle=True)
-        for b, ev in zip([b for b, _ in blocks] + [chord, transient, estimate],
-                         copies + [chords, transients, estimates]):
-            self.work[b] += ev.work
-        before = int((self.phase == _DONE).sum())
-        for (b, kind), ev in zip(blocks, copies):
-            self._copies(b, ev, kind)
-        # (in a re-solve at a finer step, a step by central differences is not compared
-        # with the last one, by forward differences: near grazing that one can be several
-        # times off. In a first solve a step that does not contract ends the attempt, as it
-        # did: there it also turns away orbits the motion does not reach)
-        self.central[central] = False
-        resolved = central[self.refine[central] > 0]
-        self.last[resolved] = np.inf
-        runs = [(ev.metrics, ev.ends, ev.strobes, ev.jacobian, ev.ok) for ev in copies]
-        runs.append((chords.metrics, chords.ends, chords.strobes,
-                     self.newton_jacobian[chord], chords.ok))
-        newton = np.concatenate([b for b, _ in blocks] + [chord])
-        after = [self._newton(newton, *(np.concatenate(parts) for parts in zip(*runs))),
-                 self._transient(transient, transients.metrics, transients.ends,
-                                 transients.strobes),
-                 self._estimate(estimate, estimates.metrics, estimates.ends, estimates.ok)]
-        self._enter(np.concatenate([newton, transient, estimate]), np.concatenate(after))
-        return int((self.phase == _DONE).sum()) - before
 
-    def _enter(self, idx, phases):
-        """Points ``idx`` go on to ``phases``; a point done, or taken on its orbit, lets its
-        successor start (once)."""
-        self.phase[idx] = phases
-        self._release(idx[(phases == _DONE) | (self.status[idx] == STATUS.settled)])
+@njit(**SOLVER_JIT)
+def _counts(T):
+    """Points not done yet, and of them those with a run to make."""
+    left = running = 0
+    for i in range(T.phase.shape[0]):
+        if T.phase[i] != _DONE:
+            left += 1
+            running += T.phase[i] != _WAITING
+    return left, running
 
-    def _copies(self, idx, ev, kind):
-        """Whether the runs of points ``idx`` with their copies of ``kind`` (an
-        Evaluation) took an affine map, and whether their monodromy is one to judge an
-        orbit on."""
-        # (the copies book no extrema: their impacts alone say they stayed clear)
-        r = self.rows[idx, None]
-        self.affine[idx] = ~self._touched(idx, ev.metrics) & np.all(
-            ((r[..., PARAM.khm] == 0) | (ev.copy_metrics[..., METRIC.impacts_per_period] == 0))
-            & ((r[..., PARAM.lower_khm] == 0)
-               | (ev.copy_metrics[..., METRIC.impacts_per_period_lower] == 0)), axis=1)
-        self.exact[idx] = self.affine[idx] | (kind != "forward")
 
-    # -- Newton ------------------------------------------------------------------------
+@njit(**SOLVER_JIT)
+def _rounds(T, threads, one):
+    """Run rounds on at most ``threads`` threads until every point is done, or one round
+    if ``one``: (points done in them, points not done yet; -1 where points wait that no
+    run will release)."""
+    done = 0
+    while True:
+        left, running = _counts(T)
+        if left == 0:
+            return done, 0
+        if running == 0:
+            return done, -1
+        done += _round(T, threads)
+        T.calls[0] += 1
+        for i in range(T.phase.shape[0]):
+            if T.phase[i] == _DONE and T.rounds[i] == 0:
+                T.rounds[i] = T.calls[0]
+        if one:
+            return done, _counts(T)[0]
 
-    def _touched(self, idx, m):
-        """Whether runs of points ``idx`` (their metric rows ``m``) touched a stop or came
-        to its gap."""
-        r = self.rows[idx]
-        return reaches_a_stop(r, m[:, METRIC.x_max], m[:, METRIC.x_min]) \
-            | (r[:, PARAM.khm] > 0) & (m[:, METRIC.impacts_per_period] > 0) \
-            | (r[:, PARAM.lower_khm] > 0) & (m[:, METRIC.impacts_per_period_lower] > 0)
 
-    def _newton(self, idx, m, centre, strobes, jac, lanes_ok):
-        """The phase _NEWTON: a Newton iterate's run, metrics ``m``, end state ``centre``
-        and strobes of its centre lane, the monodromy ``jac`` (of its copies, or reused by
-        a chord step) and whether every lane ran sane and finite. Returns each point's next
-        phase: _NEWTON for a next iterate (or the same one again, with copies), and those
-        of a fixed point (_converged) or of an attempt given up (_give_up)."""
-        phases = np.full(len(idx), _NEWTON)
-        if not idx.size:
-            return phases
-        trajectory = (self.iteration[idx] == 0) & (self.refine[idx] == 0)
-        self._trajectory_ran(idx[trajectory], m[trajectory], centre[trajectory],
-                             strobes[trajectory])
-        diverged = trajectory & ~sane(m)
-        self._diverge(idx[diverged])
-        phases[diverged] = _DONE
-        ok = ~diverged & lanes_ok
-        y = self.y[idx, :self.D]
-        scale, step, size, good, floor = self._newton_step(idx, m, centre, jac, ok)
-        converged = good & (size <= floor)
-        # an orbit with contact is not taken from beyond NEAR of it: not when the first
-        # step is beyond NEAR (the step is about the distance from the orbit), nor when the
-        # motion moved more than 2 NEAR in these p periods (d0, d1 <= NEAR would bound
-        # that move by 2 NEAR). Integrate on, for about the periods the motion needs to
-        # come NEAR (from the monodromy at t), rather than pay the iterations. Nor when the
-        # monodromy at t expands (EXPANDING): t is not in a stable orbit's linear regime
-        touched = self._touched(idx, m)
-        distance = np.maximum(size, 0.5 * norm(centre[:, :self.D] - y, scale))
-        # (a first run that touched a stop with the contact-free map's monodromy is run
-        # again with copies, and judged then)
-        recheck = trajectory & self.chord[idx] & self.affine[idx] & touched & ~diverged
-        opening = trajectory & ~recheck | self.recheck[idx]
-        self.recheck[idx] = recheck
-        # (a converged first run is judged by _converged, stable or not)
-        looked = opening & good & touched & ((distance > NEAR) | ~converged)
-        radius = np.zeros(len(idx))
-        if looked.any():
-            radius[looked] = dense.spectral_radius_each(jac[looked])
-        # (not in an attempt at the period of the stable orbit with contact the last one
-        # turned away: the motion nears that orbit, and the monodromy taken off it, by a
-        # multiplier near -1, may expand)
-        far = looked & ((distance > NEAR) | (radius > EXPANDING) & ~self.retry[idx])
-        # a later iterate of an attempt from the motion, whose run touched a stop, is given
-        # up when Newton has come within SETTLING of an orbit beyond NEAR of the motion's
-        # state at the attempt's start (on_its_way takes an orbit with contact from within
-        # NEAR of it; the steps left add up to about this one)
-        later = ~opening & ~trajectory & good & touched & ~converged \
-            & (self.refine[idx] == 0) & (size <= SETTLING) & (size <= 0.5 * self.last[idx])
-        if later.any():
-            d0 = norm(self.t0[idx] - (y + step), scale)
-            away = later & (d0 - size > NEAR)
-            if away.any():
-                radius[away] = dense.spectral_radius_each(jac[away])
-                distance = np.where(away, d0, distance)
-                far |= away
-        if far.any():
-            radius = radius[far]
-            need = np.ceil(self.p[idx[far]] * np.log(NEAR / (2 * distance[far]))
-                           / np.log(np.clip(radius, 1e-3, 1 - 1e-9)))
-            self.hint[idx[far]] = np.where(radius < 1, need, 0)
-        stalled = ~converged & ~diverged & (
-            ~good | (self.iteration[idx] + 1 >= MAX_NEWTON)
-            | (self.iteration[idx] > 0) & (size > 0.5 * self.last[idx]))
-        # in a re-solve at a finer step, an iterate that stalls within half the accuracy
-        # target of its orbit is taken (its metrics then within about the target, power
-        # being a square): where the map jumps near Newton's floor (by about its own error
-        # where a switch crosses a step's end) the iterates stall short of it, and the
-        # re-solve kept the coarser orbit, above the target; the error estimate that
-        # follows measures the orbit as taken
-        enough = stalled & good & (self.refine[idx] > 0) & (size <= 0.5 * self.accuracy[idx])
-        converged |= enough
-        stalled &= ~enough
-        # a chord step that stalls, or that touched a stop with the monodromy of an affine
-        # run (converged or not: that monodromy is not the orbit's), is taken again from
-        # the same iterate, with copies
-        again = recheck | (stalled | self.affine[idx] & touched) & self.chord[idx] & ~far \
-            & ~diverged & (self.iteration[idx] + 1 < MAX_NEWTON)
-        # a converged orbit is judged, and its multipliers given, on a monodromy by central
-        # differences (CENTRAL) where its map is not affine: the forward ones err by
-        # PERTURBATION times the map's curvature; so its copies run again from the same
-        # iterate, both ways
-        sharpen = converged & ~again & ~self.exact[idx] & ~diverged
-        # (and in a re-solve at a finer step, which has no other way to its orbit, a chord
-        # step that stalled had a monodromy too far off to contract: near grazing forward
-        # differences can be, so it is taken again by central ones)
-        self.central[idx[sharpen | again & stalled & (self.refine[idx] > 0)]] = True
-        again |= sharpen
-        converged &= ~again
-        failed = far | stalled & ~again
-        going = ~converged & ~failed & ~diverged & ~again
-        self.scale[idx[ok]] = scale[ok]
-        self.first_jacobian[idx[opening]] = jac[opening]
-        self.newton_jacobian[idx] = jac
-        self.iteration[idx[again]] += 1
-        self.chord[idx[again]] = False
-        # on: a new iterate, by a chord step where the monodromy is known there (the map is
-        # affine where no lane touched a stop; elsewhere the iterate moved less than CHORD)
-        g = idx[going]
-        self.y[g, :self.D] = y[going] + step[going]
-        self.y[g, self.D:] = centre[going, self.D:]
-        self.iteration[g] += 1
-        self.last[g] = size[going]
-        self.chord[g] = self.affine[g] | (size[going] <= CHORD)
-        # (an iterate this near is likely the orbit: its copies run both ways at once)
-        self.central[g] = ~self.chord[g] & (size[going] <= LAST_STEP)
-        # converged: a fixed point; taken or not
-        if converged.any():
-            phases[converged] = self._converged(
-                idx[converged], m[converged], centre[converged], strobes[converged],
-                jac[converged], scale[converged], floor[converged])
-        # failed: integrate on (a re-solve keeps the orbit it had)
-        self.hint[idx[failed & ~far]] = 0
-        phases[failed] = self._give_up(idx[failed])
-        return phases
+@njit(**SOLVER_JIT)
+def _lanes(T, i):
+    """Lanes of point i's next run: 0 for none, 1 alone, or with its copies (forward
+    ones, or central ones both ways)."""
+    phase = T.phase[i]
+    if phase == _NEWTON:
+        if T.chord[i]:
+            return 1
+        return 1 + T.scale.shape[1] * (2 if T.central[i] else 1)
+    return 1 if phase == _TRANSIENT or phase == _ESTIMATE else 0
 
-    def _trajectory_ran(self, idx, m, centre, strobes):
-        """The first run of an attempt of points ``idx`` is their trajectory's next p
-        periods (metrics ``m``, end states ``centre``, ``strobes``): the trajectory moves on
-        (an orbit the engine's steady-state test found is kept)."""
-        self.touched[idx] = self._touched(idx, m)
-        self.t1[idx] = centre[:, :self.D]
-        self.t1_periods[idx] = self.p[idx]
-        self.traj[idx] = centre
-        self.run[idx] += self.p[idx]
-        tested = idx[self.tested[idx]]
-        self.metrics[idx] = np.where(self.tested[idx, None], self.metrics[idx], m)
-        self.strobes[idx] = np.where(self.tested[idx, None, None], self.strobes[idx], strobes)
-        self.traj[tested] = self.y[tested]
 
-    def _newton_step(self, idx, m, centre, jac, ok):
-        """Newton's step from the iterates of points ``idx`` to the fixed point of the map
-        that ran them to ``centre`` with monodromy ``jac`` (where ``ok``): the component
-        scales of the run (its own where ok, else the last), the step, its size relative
-        to the scales (inf where I - M is singular), whether it was taken (``good``), and
-        Newton's floor (the settle tolerance, or rounding times the conditioning of
-        I - M)."""
-        xs = np.maximum(np.abs(m[:, METRIC.x_max]), np.abs(m[:, METRIC.x_min]))
-        scale = self._scales(np.where(ok, xs, 1.0), np.where(ok, m[:, METRIC.v_peak], 1.0),
-                             idx)
-        scale = np.where(ok[:, None] & (scale > 0), scale, self.scale[idx])
-        residual = centre[:, :self.D] - self.y[idx, :self.D]
-        step = np.zeros_like(residual)
-        cond = np.full(len(idx), np.inf)
-        a = np.eye(self.D) - np.where(ok[:, None, None], jac, 0.0)
-        scaled = a / scale[:, :, None] * scale[:, None, :]  # (I - M) in scaled components
-        good = ok & (np.abs(dense.det_each(scaled)) > 1e-12)
-        if good.any():
-            inverse = dense.inverse_each(scaled[good])
-            step[good] = scale[good] * dense.matvec_each(inverse, residual[good] / scale[good])
-            cond[good] = dense.row_sum_norm_each(inverse)
-        size = np.where(good, norm(step, scale), np.inf)
-        floor = np.maximum(self.rows[idx, PARAM.tolerance], ROUNDING * cond)
-        return scale, step, size, good, floor
+@njit(**SOLVER_JIT)
+def _round(T, threads):
+    """Run every point's next request in one engine call and act on the results; returns
+    the number of points that finished."""
+    n, size = T.scale.shape
+    first = np.zeros(n + 1, dtype=np.int64)
+    for i in range(n):
+        first[i + 1] = first[i] + _lanes(T, i)
+    total = first[n]
+    params = np.empty((total, T.rows.shape[1]))
+    states = np.empty((total, T.y.shape[1]))
+    for i in range(n):
+        width = first[i + 1] - first[i]
+        if width == 0:
+            continue
+        k = first[i]
+        steps, periods, start = T.steps[i], float(T.p[i]), T.y[i]
+        if T.phase[i] == _TRANSIENT:
+            # (no slice shorter than MAX_ORBIT_PERIOD unless the whole chunk is: _chunk)
+            left = T.left[i]
+            periods, start = left if left < SLICE + MAX_ORBIT_PERIOD else SLICE, T.traj[i]
+        elif T.phase[i] == _ESTIMATE:
+            steps = 2 * steps
+        for w in range(width):
+            params[k + w] = T.rows[i]
+            params[k + w, PARAM.steps] = steps
+            params[k + w, PARAM.max_periods] = periods
+            states[k + w] = start
+            if w > 0:  # (the copies book no extrema: their end states alone are read)
+                params[k + w, PARAM.book] = 0.0
+        if width > 1:  # copies, each moved along one component by its scale
+            move = PERTURBATION if width == 1 + size else CENTRAL
+            for c in range(size):
+                states[k + 1 + c, c] += move * T.scale[i, c]
+                if width > 1 + size:
+                    states[k + 1 + size + c, c] += -move * T.scale[i, c]
+    metrics = np.empty((total, len(METRIC)))
+    strobes = np.empty((total, SAMPLES, size))
+    # (the engine's steady-state test ends a piece of the motion that settles; it never
+    # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer than
+    # the SAMPLES periods the test waits for)
+    run_lanes(params, states, metrics, strobes, threads)
+    before = 0
+    for i in range(n):
+        before += T.phase[i] == _DONE
+    phases = T.phase.copy()
+    jac = np.empty((size, size))
+    for i in range(n):
+        k, width = first[i], first[i + 1] - first[i]
+        if width == 0:
+            continue
+        ok = True
+        for w in range(width):
+            ok = ok and sane_run(metrics[k + w])
+            for c in range(size):
+                ok = ok and np.isfinite(states[k + w, c])
+        _book_work(T, i, params, metrics, k, width)
+        m, end, strobe = metrics[k], states[k], strobes[k]
+        if T.phase[i] == _NEWTON:
+            if width > 1:
+                central = width > 1 + size
+                copies_monodromy(states[k:k + width], T.scale[i], central, jac)
+                _copies(T, i, metrics[k:k + width], central)
+                # (in a re-solve at a finer step, a step by central differences is not
+                # compared with the last one, by forward differences: near grazing that
+                # one can be several times off. In a first solve a step that does not
+                # contract ends the attempt, as it did: there it also turns away orbits
+                # the motion does not reach)
+                if central:
+                    T.central[i] = False
+                    if T.refine[i] > 0:
+                        T.last[i] = np.inf
+            else:
+                jac[:] = T.newton_jacobian[i]
+            phases[i] = _newton(T, i, m, end, strobe, jac.copy(), ok)
+        elif T.phase[i] == _TRANSIENT:
+            phases[i] = _transient(T, i, m, end, strobe)
+        else:
+            phases[i] = _estimate(T, i, m, end, ok)
+    for i in range(n):
+        if first[i + 1] > first[i]:
+            _enter(T, i, phases[i])
+    after = 0
+    for i in range(n):
+        after += T.phase[i] == _DONE
+    return after - before
 
-    def _converged(self, idx, m, centre, strobes, jac, scale, floor):
-        """Points ``idx`` whose Newton iterates converged to a fixed point: solved again at a
-        shorter period that closes the orbit too (_NEWTON), taken (_ESTIMATE, or _DONE
-        without an error estimate), or not taken (_give_up). Returns their next phases."""
-        phases = np.full(len(idx), _NEWTON)
-        p = self.p[idx]
-        y = self.y[idx, :self.D]
-        # a shorter period that also closes the orbit: solve again at it
-        shorter = np.zeros(len(idx), dtype=np.int64)
-        for d in range(int(p.max()) - 1, 0, -1):
-            sample = strobes[np.arange(len(idx)), SAMPLES - 1 - (p - d).clip(0)]
-            closes = (d < p) & (p % d == 0) & (norm(sample - y, scale) <= 10 * floor)
-            shorter = np.where(closes, d, shorter)
-        again = shorter > 0
-        if again.any():
-            self.p[idx[again]] = shorter[again]
-            self.iteration[idx[again]] = 1  # (the trajectory already ran this attempt)
-            self.last[idx[again]] = np.inf
-            self.chord[idx[again]] = False
-        keep = ~again
-        idx, m, centre, strobes, jac, scale, floor, y = (
-            a[keep] for a in (idx, m, centre, strobes, jac, scale, floor, y))
-        if not idx.size:
-            return phases
-        kept = np.zeros(len(idx), phases.dtype)
-        p = self.p[idx]
-        radius = dense.spectral_radius_each(jac)
-        stable = radius < 1.0
-        refining = self.refine[idx] > 0
-        r = self.rows[idx]
-        # (a moving stop comes at most stop_displacement_max towards the tip: 0 if rigid)
-        xmax = np.maximum(m[:, METRIC.x_max], centre[:, STATE.x]) \
-            + m[:, METRIC.stop_displacement_max]
-        xmin = np.minimum(m[:, METRIC.x_min], centre[:, STATE.x])
-        free = (m[:, METRIC.impacts_per_period] == 0) & (xmax < r[:, PARAM.gap]) \
-            & (m[:, METRIC.impacts_per_period_lower] == 0) & (xmin > -r[:, PARAM.lower_gap])
-        e = self.t0[idx] - y
-        proved = never_reaches(r, xmax, xmin, e)
-        linear = (r[:, PARAM.khm] == 0) & (r[:, PARAM.lower_khm] == 0)  # (no stop at all)
-        free |= linear
-        proved |= linear
-        q = np.maximum(self.t1_periods[idx] // p, 1)  # (maps of p periods from t0 to t1)
-        on_way = np.zeros(len(idx), bool)  # (asked where the orbit has contact)
-        w = ~free
-        near = np.full(len(idx), NEAR)
-        if w.any():
-            near[w] = reach(m[w], scale[w])
-            on_way[w] = on_its_way(self.t0[idx[w]], self.t1[idx[w]], q[w], y[w], jac[w],
-                                   scale[w], floor[w], near[w])
-        taken = refining | stable & np.where(free, proved, on_way)
-        t = idx[taken]
-        self.metrics[t] = m[taken]
-        self.strobes[t] = strobes[taken]
-        self.finals[t, :self.D] = y[taken]
-        self.finals[t, self.D:] = centre[taken, self.D:]
-        self.y[t] = self.finals[t]
-        self.jacobian[t] = jac[taken]
-        self.orbit_steps[t] = self.steps[t]
-        self.floor[t] = floor[taken]
-        self.status[t] = STATUS.settled  # (its successor starts: need not wait for estimates)
-        self._start_estimate(t[self.estimated[t]])
-        kept[taken] = np.where(self.estimated[t], _ESTIMATE, _DONE)
-        # not taken: integrate on for about the periods the motion needs to come near
-        d0 = norm(e, scale)
-        with np.errstate(divide="ignore"):  # (d0 = 0: no hint, below)
-            hint = np.ceil(p[~taken] * np.log(near[~taken] / (2 * d0[~taken]))
-                           / np.log(np.clip(radius[~taken], 1e-3, 1 - 1e-9)))
-        self.hint[idx[~taken]] = np.where(stable[~taken] & (d0[~taken] > near[~taken]), hint, 0)
-        self.refused[idx[~taken]] = np.where(stable[~taken] & w[~taken], p[~taken], 0)
-        kept[~taken] = self._give_up(idx[~taken])
-        phases[keep] = kept
-        return phases
 
-    def _give_up(self, idx):
-        """An attempt that did not give an orbit to take: integrate the trajectory on
-        (_TRANSIENT), or _DONE: a re-solve at a finer step keeps the orbit and estimate it
-        had; an orbit found by the engine's steady-state test stands, with the monodromy of
-        the attempt's first run, at its state (not estimated: the orbit is not a fixed point
-        to Newton); a budget spent ends the point not settled. Returns the next phases."""
-        refining = self.refine[idx] > 0
-        tested = ~refining & self.tested[idx]
-        left = ~refining & ~tested & (self.run[idx] < self.rows[idx, PARAM.max_periods])
-        out = ~refining & ~tested & ~left
-        t, o = idx[tested], idx[out]
-        self.status[t] = STATUS.settled
-        self.finals[t] = self.traj[t]
-        self.jacobian[t] = self.first_jacobian[t]
-        self._chunk(idx[left])
-        self.status[o] = STATUS.not_settled
-        self.finals[o] = self.traj[o]
-        return np.where(left, _TRANSIENT, _DONE)
+@njit(**SOLVER_JIT)
+def _book_work(T, i, params, metrics, k, width):
+    """Add the RK4 steps of point i's lanes k ... k + width to its work, by kind (WORK)."""
+    phase = T.phase[i]
+    for w in range(width):
+        steps = metrics[k + w, METRIC.periods_run] * params[k + w, PARAM.steps]
+        if phase == _ESTIMATE:
+            kind = 4
+        elif phase == _TRANSIENT:
+            kind = 0
+        elif w == 0:
+            kind = 1
+        else:
+            kind = 2 if width == 1 + T.scale.shape[1] else 3
+        T.work[i, kind] += steps
 
-    def _diverge(self, idx):
-        """Points ``idx`` diverged: done, their successors start from their own state."""
-        self.status[idx] = STATUS.diverged
-        self.metrics[idx, :METRIC.orbit_period] = np.nan
-        self.strobes[idx] = np.nan
-        self.finals[idx] = self.traj[idx]
 
-    # -- the trajectory ----------------------------------------------------------------
+@njit(**SOLVER_JIT)
+def _enter(T, i, phase):
+    """Point i goes on to ``phase``; a point done, or taken on its orbit, lets its
+    successor start (once)."""
+    T.phase[i] = phase
+    if phase == _DONE or T.status[i] == STATUS.settled:
+        _release(T, i)
 
-    def _chunk(self, idx):
-        """Points ``idx`` integrate their trajectory on: as long as all it has run so far
-        (at least FIRST_CHUNK periods), or the periods the last attempt's monodromy says
-        the motion needs to come NEAR its orbit, within the budget: to its end, or short of
-        it by 2 MAX_ORBIT_PERIOD periods at least (phase _TRANSIENT)."""
-        chunk = np.maximum(self.run[idx], FIRST_CHUNK)
-        hint = self.hint[idx]
-        chunk = np.where(hint > 0, np.clip(hint, self.p[idx], 4 * chunk), chunk)
-        # (a motion that does not settle reports its last MAX_ORBIT_PERIOD periods: a chunk
-        # that ends short of the budget leaves twice that, room for an attempt of up to
-        # MAX_ORBIT_PERIOD periods and a last piece of trajectory as long as the report)
-        rest = self.rows[idx, PARAM.max_periods] - self.run[idx]
-        self.left[idx] = np.where((chunk >= rest) | (rest <= 2 * MAX_ORBIT_PERIOD), rest,
-                                  np.minimum(chunk, rest - 2 * MAX_ORBIT_PERIOD))
 
-    def _transient(self, idx, m, f, strobes):
-        """The phase _TRANSIENT: a piece of the trajectory's chunk was run (metrics ``m``,
-        end states ``f``, ``strobes``). Returns each point's next phase: _TRANSIENT while the
-        chunk goes on, _NEWTON for an attempt from where it got to, _DONE when it diverged
-        or spent its budget."""
-        phases = np.full(len(idx), _DONE)
-        if not idx.size:
-            return phases
-        self.touched[idx] = self._touched(idx, m)
-        self.run[idx] += m[:, METRIC.periods_run]
-        self.left[idx] -= m[:, METRIC.periods_run]
-        self.traj[idx] = f
-        self.metrics[idx] = m
-        self.strobes[idx] = strobes
-        bad = ~sane(m)
-        self._diverge(idx[bad])
-        out = ~bad & (self.run[idx] >= self.rows[idx, PARAM.max_periods])
-        self.status[idx[out]] = STATUS.not_settled
-        self.finals[idx[out]] = self.traj[idx[out]]
-        rest = ~bad & ~out
-        position = np.flatnonzero(rest)
-        idx, strobes, m = idx[rest], strobes[rest], m[rest]
-        # the engine's steady-state test passed: Newton polishes the orbit and gives its
-        # multipliers; where it cannot (a period map too rough for it), the orbit the test
-        # found stands (_give_up)
-        settled = m[:, METRIC.status] == STATUS.settled
-        on = ~settled & (self.left[idx] > 0)  # the chunk goes on in the next round
-        phases[position] = np.where(on, _TRANSIENT, _NEWTON)
-        idx, strobes, m, settled = idx[~on], strobes[~on], m[~on], settled[~on]
-        self.tested[idx[settled]] = True
-        # (a motion nearing a stable orbit along a multiplier near -1 repeats after twice
-        # its period better than after it, and Newton on that map, whose multiplier is
-        # then near +1, stalls: where the samples suggest twice the period of the orbit
-        # with contact it was last turned away from, the period is that orbit's)
-        suggested = _orbit_period(strobes, self.scale[idx])
-        refused = self.refused[idx]
-        suggested = np.where((refused > 0) & (suggested == 2 * refused), refused, suggested)
-        self.retry[idx] = ~settled & (suggested == refused)
-        self.refused[idx] = 0
-        self.p[idx] = np.where(settled, m[:, METRIC.orbit_period].astype(np.int64), suggested)
-        self._attempt(idx)
-        return phases
+@njit(**SOLVER_JIT)
+def _copies(T, i, m, central):
+    """Whether point i's run with its copies (metric rows ``m``, its own first) took an
+    affine map, and whether its monodromy is one to judge an orbit on."""
+    row = T.rows[i]
+    affine = not _touched(row, m[0])
+    # (the copies book no extrema: their impacts alone say they stayed clear)
+    for w in range(1, m.shape[0]):
+        affine = affine and (row[PARAM.khm] == 0 or m[w, METRIC.impacts_per_period] == 0) \
+            and (row[PARAM.lower_khm] == 0 or m[w, METRIC.impacts_per_period_lower] == 0)
+    T.affine[i] = affine
+    T.exact[i] = affine or central
 
-    # -- error estimate and accuracy -----------------------------------------------------
 
-    def _start_estimate(self, idx):
-        """Set up the error estimate of the orbits taken (phase _ESTIMATE)."""
-        self.iteration[idx] = 0
+@njit(**SOLVER_JIT)
+def _touched(row, m):
+    """Whether a run of packed row ``row`` (its metric row ``m``) touched a stop or came to
+    its gap."""
+    return reaches_a_stop(row, m[METRIC.x_max], m[METRIC.x_min]) \
+        or (row[PARAM.khm] > 0 and m[METRIC.impacts_per_period] > 0) \
+        or (row[PARAM.lower_khm] > 0 and m[METRIC.impacts_per_period_lower] > 0)
 
-    def _estimate(self, idx, m, f, ok):
-        """The phase _ESTIMATE: quasi-Newton at twice the steps from the orbit, with its
-        monodromy. Returns each point's next phase: _ESTIMATE until the orbit at twice the
-        steps is located, then _DONE, or _NEWTON for a re-solve at a finer step where the
-        estimate is above the accuracy target (_refine)."""
-        phases = np.full(len(idx), _ESTIMATE)
-        if not idx.size:
-            return phases
-        a = np.eye(self.D) - np.where(ok[:, None, None], self.jacobian[idx], 0.0)
-        step = np.zeros((len(idx), self.D))
-        if ok.any():
-            residual = f[ok, :self.D] - self.y[idx[ok], :self.D]
-            step[ok] = dense.solve_each(a[ok], residual)
-        size = np.where(ok, norm(step, self.scale[idx]), np.inf)
-        with np.errstate(invalid="ignore"):
-            change = np.where(ok, halving_error(self.metrics[idx], m), np.nan)
-        # (or the run is near enough the orbit at twice the steps for the change it
-        # measures: where the map is not smooth at Newton's floor the iterates contract
-        # slowly, and four runs may not reach it)
-        converged = ok & ((size <= self.floor[idx]) | (size <= LOCATED * change))
-        self.iteration[idx] += 1
-        last = ~converged & (self.iteration[idx] >= ESTIMATE_RUNS)
-        # at the last run, an estimate still not located but farther from the target than
-        # the run is from the finer orbit says whether the target is met (the metrics of
-        # a run move by about twice its start's distance, power being a square): where the
-        # map jumps near Newton's floor the iterates may stall short of LOCATED
-        decided = last & ok & (np.abs(change - self.accuracy[idx]) >= 2 * size)
-        converged |= decided
-        failed = last & ~decided
-        going = ~converged & ~failed
-        self.y[idx[going], :self.D] += step[going]
-        phases[failed] = _DONE
-        c = idx[converged]
-        self.fine[c] = m[converged]
-        self.errors[c] = change[converged]
-        # the accuracy target: solve again at the step the fourth order asks for, or at
-        # twice the steps after a re-solve whose estimate fell slower than SLOW_ORDER
-        target = self.accuracy[c]
-        want = refined_steps(self.steps[c], self.errors[c], target, self.coarser[c],
-                             self.refine[c])
-        again = (np.isfinite(target) & (self.errors[c] > target) & (self.refine[c] < REFINEMENTS)
-                 & (want <= self.max_steps[c]))
-        self._refine(c[again], want[again], step[converged][again])
-        phases[converged] = np.where(again, _NEWTON, _DONE)
-        return phases
 
-    def _refine(self, idx, steps, step):
-        """Set up the re-solve of points ``idx`` at ``steps`` steps per period (at least
-        STEPS_QUANTUM more), from their orbit moved by ``step``, Newton's step towards the
-        orbit at twice the steps (phase _NEWTON)."""
-        self.coarser[idx] = np.stack([self.steps[idx], self.errors[idx]], axis=1)
-        self.steps[idx] = np.maximum(steps, self.steps[idx] + STEPS_QUANTUM)
-        self.refine[idx] += 1
-        self.y[idx, :self.D] += step  # the orbit at twice the steps: closer
-        self.iteration[idx] = 0
-        self.last[idx] = np.inf
-        self.touched[idx] = self._touched(idx, self.metrics[idx])
-        self._first_run(idx)
+@njit(**SOLVER_JIT)
+def _larger(a, b):
+    """The larger of a and b, NaN if either is (numpy's maximum)."""
+    return np.nan if a != a or b != b else max(a, b)
 
-    # -- the end of a point --------------------------------------------------------------
 
-    def _release(self, idx):
-        """The successors of points ``idx`` start from their orbit (from their own initial
-        state after a divergence), once."""
-        idx = idx[~self.released[idx]]
-        self.released[idx] = True
-        nxt = self.successors[idx]
-        has = nxt >= 0
-        follow, nxt = idx[has], nxt[has]
-        if not nxt.size:
+@njit(**SOLVER_JIT)
+def _smaller(a, b):
+    """The smaller of a and b, NaN if either is (numpy's minimum)."""
+    return np.nan if a != a or b != b else min(a, b)
+
+
+@njit(**SOLVER_JIT)
+def _periods_to_near(p, near, distance, radius):
+    """Periods a motion ``distance`` from a stable orbit of period ``p`` and spectral
+    radius ``radius`` needs to come to half ``near`` of it."""
+    return np.ceil(p * np.log(near / (2 * distance))
+                   / np.log(min(max(radius, 1e-3), 1 - 1e-9)))
+
+
+# -- set-up of a point -------------------------------------------------------------------
+
+@njit(**SOLVER_JIT)
+def _start(T, i):
+    """Point i starts: a refused one is done at once (its state passes on, and its
+    successor starts), the others make a Newton attempt from their initial state."""
+    while i >= 0:
+        if T.rows[i, PARAM.max_periods] > 0:
+            T.traj[i] = T.begin[i]
+            _attempt(T, i)
+            T.phase[i] = _NEWTON
             return
-        kept = self.status[follow] != STATUS.diverged
-        self.begin[nxt[kept]] = self.finals[follow[kept]]
-        self.touched[nxt[kept]] = self._touched(follow[kept], self.metrics[follow[kept]])
-        self.p[nxt] = np.where(self.status[follow] == STATUS.settled, self.p[follow], 1)
-        self.start(nxt)
-
-    def result(self, samples):
-        n = len(self.rows)
-        metrics = self.metrics.copy()
-        settled = self.status == STATUS.settled
-        metrics[:, METRIC.status] = self.status
-        metrics[:, METRIC.orbit_period] = np.where(settled, self.p, 0)
-        metrics[:, METRIC.periods_run] = self.run
-        multipliers = np.full((n, self.D), np.nan + 0j)
-        if settled.any():
-            multipliers[settled] = sorted_multipliers(self.jacobian[settled])
-        strobes = np.full((n, samples, self.D), np.nan)
-        age = np.arange(samples)[::-1]  # periods before the end
-        # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
-        p = np.where(settled, self.p, SAMPLES)
-        back = np.where(settled[:, None], age[None, :] % p[:, None], age[None, :])
-        valid = back < SAMPLES
-        taken = np.take_along_axis(self.strobes, (SAMPLES - 1 - back.clip(0, SAMPLES - 1))
-                                   [..., None].repeat(self.D, axis=2), axis=1)
-        strobes[valid] = taken[valid]
-        return Orbits(metrics, strobes, self.finals, multipliers, self.errors,
-                      self.orbit_steps.astype(np.int64), self.work.astype(np.int64),
-                      self.rounds.copy())
+        T.metrics[i, :METRIC.orbit_period] = np.nan
+        T.status[i] = STATUS.too_stiff
+        T.finals[i] = T.begin[i]
+        T.phase[i] = _DONE
+        i = _pass_on(T, i)
 
 
+@njit(**SOLVER_JIT)
+def _release(T, i):
+    """The successor of point i starts from its orbit (from its own initial state after a
+    divergence), once."""
+    following = _pass_on(T, i)
+    if following >= 0:
+        _start(T, following)
+
+
+@njit(**SOLVER_JIT)
+def _pass_on(T, i):
+    """Hand point i's orbit to its successor, once: returns the successor to start, or -1."""
+    if T.released[i]:
+        return -1
+    T.released[i] = True
+    following = T.successors[i]
+    if following < 0:
+        return -1
+    if T.status[i] != STATUS.diverged:
+        T.begin[following] = T.finals[i]
+        T.touched[following] = _touched(T.rows[i], T.metrics[i])
+    T.p[following] = T.p[i] if T.status[i] == STATUS.settled else 1
+    return following
+
+
+@njit(**SOLVER_JIT)
+def _attempt(T, i):
+    """Set up a Newton attempt from the trajectory's state (phase _NEWTON)."""
+    size = T.scale.shape[1]
+    T.y[i] = T.traj[i]
+    T.t0[i] = T.traj[i, :size]
+    T.iteration[i] = 0
+    T.last[i] = np.inf
+    _first_run(T, i)
+
+
+@njit(**SOLVER_JIT)
+def _first_run(T, i):
+    """Newton's first run from point i's iterate: where the motion was clear of the stops,
+    it is likely to be too, so its centre lane alone, with the contact-free map's
+    monodromy (run again with copies if it touched after all); else with copies."""
+    T.chord[i] = T.central[i] = T.exact[i] = False
+    # (a moving stop's map is not the tip's alone)
+    if T.scale.shape[1] == N_RIGID and not T.touched[i]:
+        T.chord[i] = T.affine[i] = T.exact[i] = True
+        free_monodromy_into(T.rows[i:i + 1], T.steps[i:i + 1], T.p[i:i + 1],
+                            T.newton_jacobian[i:i + 1])
+
+
+# -- Newton --------------------------------------------------------------------------------
+
+@njit(**SOLVER_JIT)
+def _newton(T, i, m, centre, strobes, jac, lanes_ok):
+    """The phase _NEWTON: point i's Newton iterate ran, metrics ``m``, end state ``centre``
+    and strobes of its centre lane, the monodromy ``jac`` (of its copies, or reused by a
+    chord step) and whether every lane ran sane and finite. Returns its next phase:
+    _NEWTON for a next iterate (or the same one again, with copies), and those of a fixed
+    point (_converged) or of an attempt given up (_give_up)."""
+    size = T.scale.shape[1]
+    phase = _NEWTON
+    trajectory = T.iteration[i] == 0 and T.refine[i] == 0
+    if trajectory:
+        _trajectory_ran(T, i, m, centre, strobes)
+    diverged = trajectory and not sane_run(m)
+    if diverged:
+        _diverge(T, i)
+        phase = _DONE
+    ok = not diverged and lanes_ok
+    y = T.y[i, :size].copy()
+    scale, step, size_, good, floor = _newton_step(T, i, m, centre, jac, ok)
+    converged = good and size_ <= floor
+    # an orbit with contact is not taken from beyond NEAR of it: not when the first step
+    # is beyond NEAR (the step is about the distance from the orbit), nor when the motion
+    # moved more than 2 NEAR in these p periods (d0, d1 <= NEAR would bound that move by
+    # 2 NEAR). Integrate on, for about the periods the motion needs to come NEAR (from the
+    # monodromy at t), rather than pay the iterations. Nor when the monodromy at t expands
+    # (EXPANDING): t is not in a stable orbit's linear regime
+    touched = _touched(T.rows[i], m)
+    distance = _larger(size_, 0.5 * norm(centre[:size] - y, scale))
+    # (a first run that touched a stop with the contact-free map's monodromy is run again
+    # with copies, and judged then)
+    recheck = trajectory and T.chord[i] and T.affine[i] and touched and not diverged
+    opening = (trajectory and not recheck) or T.recheck[i]
+    T.recheck[i] = recheck
+    # (a converged first run is judged by _converged, stable or not)
+    looked = opening and good and touched and (distance > NEAR or not converged)
+    radius = dense.spectral_radius(jac) if looked else 0.0
+    # (not in an attempt at the period of the stable orbit with contact the last one
+    # turned away: the motion nears that orbit, and the monodromy taken off it, by a
+    # multiplier near -1, may expand)
+    far = looked and (distance > NEAR or (radius > EXPANDING and not T.retry[i]))
+    # a later iterate of an attempt from the motion, whose run touched a stop, is given
+    # up when Newton has come within SETTLING of an orbit beyond NEAR of the motion's
+    # state at the attempt's start (on_its_way takes an orbit with contact from within
+    # NEAR of it; the steps left add up to about this one)
+    later = not opening and not trajectory and good and touched and not converged \
+        and T.refine[i] == 0 and size_ <= SETTLING and size_ <= 0.5 * T.last[i]
+    if later:
+        d0 = norm(T.t0[i] - (y + step), scale)
+        if d0 - size_ > NEAR:
+            radius = dense.spectral_radius(jac)
+            distance = d0
+            far = True
+    if far:
+        need = _periods_to_near(T.p[i], NEAR, distance, radius)
+        T.hint[i] = need if radius < 1 else 0.0
+    stalled = not converged and not diverged and (
+        not good or T.iteration[i] + 1 >= MAX_NEWTON
+        or (T.iteration[i] > 0 and size_ > 0.5 * T.last[i]))
+    # in a re-solve at a finer step, an iterate that stalls within half the accuracy target
+    # of its orbit is taken (its metrics then within about the target, power being a
+    # square): where the map jumps near Newton's floor (by about its own error where a
+    # switch crosses a step's end) the iterates stall short of it, and the re-solve kept
+    # the coarser orbit, above the target; the error estimate that follows measures the
+    # orbit as taken
+    enough = stalled and good and T.refine[i] > 0 and size_ <= 0.5 * T.accuracy[i]
+    converged = converged or enough
+    stalled = stalled and not enough
+    # a chord step that stalls, or that touched a stop with the monodromy of an affine run
+    # (converged or not: that monodromy is not the orbit's), is taken again from the same
+    # iterate, with copies
+    again = recheck or ((stalled or (T.affine[i] and touched)) and T.chord[i] and not far
+                        and not diverged and T.iteration[i] + 1 < MAX_NEWTON)
+    # a converged orbit is judged, and its multipliers given, on a monodromy by central
+    # differences (CENTRAL) where its map is not affine: the forward ones err by
+    # PERTURBATION times the map's curvature; so its copies run again from the same
+    # iterate, both ways
+    sharpen = converged and not again and not T.exact[i] and not diverged
+    # (and in a re-solve at a finer step, which has no other way to its orbit, a chord step
+    # that stalled had a monodromy too far off to contract: near grazing forward
+    # differences can be, so it is taken again by central ones)
+    if sharpen or (again and stalled and T.refine[i] > 0):
+        T.central[i] = True
+    again = again or sharpen
+    converged = converged and not again
+    failed = far or (stalled and not again)
+    going = not converged and not failed and not diverged and not again
+    if ok:
+        T.scale[i] = scale
+    if opening:
+        T.first_jacobian[i] = jac
+    T.newton_jacobian[i] = jac
+    if again:
+        T.iteration[i] += 1
+        T.chord[i] = False
+    # on: a new iterate, by a chord step where the monodromy is known there (the map is
+    # affine where no lane touched a stop; elsewhere the iterate moved less than CHORD)
+    if going:
+        T.y[i, :size] = y + step
+        T.y[i, size:] = centre[size:]
+        T.iteration[i] += 1
+        T.last[i] = size_
+        T.chord[i] = T.affine[i] or size_ <= CHORD
+        # (an iterate this near is likely the orbit: its copies run both ways at once)
+        T.central[i] = not T.chord[i] and size_ <= LAST_STEP
+    if converged:  # a fixed point; taken or not
+        phase = _converged(T, i, m, centre, strobes, jac, scale, floor)
+    if failed:  # integrate on (a re-solve keeps the orbit it had)
+        if not far:
+            T.hint[i] = 0.0
+        phase = _give_up(T, i)
+    return phase
+
+
+@njit(**SOLVER_JIT)
+def _trajectory_ran(T, i, m, centre, strobes):
+    """The first run of point i's attempt is its trajectory's next p periods (metrics
+    ``m``, end state ``centre``, ``strobes``): the trajectory moves on (an orbit the
+    engine's steady-state test found is kept)."""
+    size = T.scale.shape[1]
+    T.touched[i] = _touched(T.rows[i], m)
+    T.t1[i] = centre[:size]
+    T.t1_periods[i] = T.p[i]
+    T.traj[i] = centre
+    T.run[i] += T.p[i]
+    if T.tested[i]:
+        T.traj[i] = T.y[i]
+    else:
+        T.metrics[i] = m
+        T.strobes[i] = strobes
+
+
+@njit(**SOLVER_JIT)
+def _newton_step(T, i, m, centre, jac, ok):
+    """Newton's step from point i's iterate to the fixed point of the map that ran it to
+    ``centre`` with monodromy ``jac`` (where ``ok``): the component scales of the run (its
+    own where ok, else the last), the step, its size relative to the scales (inf where
+    I - M is singular), whether it was taken (``good``), and Newton's floor (the settle
+    tolerance, or rounding times the conditioning of I - M)."""
+    size = T.scale.shape[1]
+    xs = _larger(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]))
+    scale = np.empty(size)
+    period_map.point_scales(T.rows[i], xs if ok else 1.0, m[METRIC.v_peak] if ok else 1.0,
+                            scale)
+    for c in range(size):
+        if not (ok and scale[c] > 0):
+            scale[c] = T.scale[i, c]
+    residual = centre[:size] - T.y[i, :size]
+    step = np.zeros(size)
+    cond = np.inf
+    good = False
+    if ok:
+        scaled = np.empty((size, size))  # (I - M) in scaled components
+        for r in range(size):
+            for c in range(size):
+                scaled[r, c] = ((1.0 if r == c else 0.0) - jac[r, c]) / scale[r] * scale[c]
+        good = abs(dense.det(scaled)) > 1e-12
+        if good:
+            inverse = dense.inverse(scaled)
+            step = scale * dense.matvec(inverse, residual / scale)
+            cond = dense.row_sum_norm(inverse)
+    size_ = norm(step, scale) if good else np.inf
+    floor = _larger(T.rows[i, PARAM.tolerance], ROUNDING * cond)
+    return scale, step, size_, good, floor
+
+
+@njit(**SOLVER_JIT)
+def _converged(T, i, m, centre, strobes, jac, scale, floor):
+    """Point i's Newton iterates converged to a fixed point: solved again at a shorter
+    period that closes the orbit too (_NEWTON), taken (_ESTIMATE, or _DONE without an
+    error estimate), or not taken (_give_up). Returns its next phase."""
+    size = T.scale.shape[1]
+    p = T.p[i]
+    y = T.y[i, :size].copy()
+    # a shorter period that also closes the orbit: solve again at it
+    shorter = 0
+    for d in range(p - 1, 0, -1):
+        if p % d == 0 and norm(strobes[SAMPLES - 1 - (p - d)] - y, scale) <= 10 * floor:
+            shorter = d
+    if shorter > 0:
+        T.p[i] = shorter
+        T.iteration[i] = 1  # (the trajectory already ran this attempt)
+        T.last[i] = np.inf
+        T.chord[i] = False
+        return _NEWTON
+    radius = dense.spectral_radius(jac)
+    stable = radius < 1.0
+    refining = T.refine[i] > 0
+    row = T.rows[i]
+    # (a moving stop comes at most stop_displacement_max towards the tip: 0 if rigid)
+    xmax = _larger(m[METRIC.x_max], centre[STATE.x]) + m[METRIC.stop_displacement_max]
+    xmin = _smaller(m[METRIC.x_min], centre[STATE.x])
+    free = m[METRIC.impacts_per_period] == 0 and xmax < row[PARAM.gap] \
+        and m[METRIC.impacts_per_period_lower] == 0 and xmin > -row[PARAM.lower_gap]
+    e = T.t0[i] - y
+    proved = never_reaches(row, xmax, xmin, e)
+    linear = row[PARAM.khm] == 0 and row[PARAM.lower_khm] == 0  # (no stop at all)
+    free = free or linear
+    proved = proved or linear
+    near = NEAR
+    on_way = False  # (asked where the orbit has contact)
+    if not free:
+        q = max(T.t1_periods[i] // p, 1)  # (maps of p periods from t0 to t1)
+        near = reach(m, scale)
+        on_way = on_its_way(T.t0[i], T.t1[i], q, y, jac, scale, floor, near)
+    if refining or (stable and (proved if free else on_way)):
+        T.metrics[i] = m
+        T.strobes[i] = strobes
+        T.finals[i, :size] = y
+        T.finals[i, size:] = centre[size:]
+        T.y[i] = T.finals[i]
+        T.jacobian[i] = jac
+        T.orbit_steps[i] = T.steps[i]
+        T.floor[i] = floor
+        T.status[i] = STATUS.settled  # (its successor starts: need not wait for estimates)
+        if T.estimated[i]:
+            T.iteration[i] = 0
+            return _ESTIMATE
+        return _DONE
+    # not taken: integrate on for about the periods the motion needs to come near
+    d0 = norm(e, scale)
+    T.hint[i] = _periods_to_near(p, near, d0, radius) if stable and d0 > near else 0.0
+    T.refused[i] = p if stable and not free else 0
+    return _give_up(T, i)
+
+
+@njit(**SOLVER_JIT)
+def _give_up(T, i):
+    """Point i's attempt did not give an orbit to take: integrate the trajectory on
+    (_TRANSIENT), or _DONE: a re-solve at a finer step keeps the orbit and estimate it
+    had; an orbit found by the engine's steady-state test stands, with the monodromy of
+    the attempt's first run, at its state (not estimated: the orbit is not a fixed point
+    to Newton); a budget spent ends the point not settled. Returns the next phase."""
+    if T.refine[i] > 0:
+        return _DONE
+    if T.tested[i]:
+        T.status[i] = STATUS.settled
+        T.finals[i] = T.traj[i]
+        T.jacobian[i] = T.first_jacobian[i]
+        return _DONE
+    if T.run[i] < T.rows[i, PARAM.max_periods]:
+        _chunk(T, i)
+        return _TRANSIENT
+    T.status[i] = STATUS.not_settled
+    T.finals[i] = T.traj[i]
+    return _DONE
+
+
+@njit(**SOLVER_JIT)
+def _diverge(T, i):
+    """Point i diverged: done, its successor starts from its own state."""
+    T.status[i] = STATUS.diverged
+    T.metrics[i, :METRIC.orbit_period] = np.nan
+    T.strobes[i] = np.nan
+    T.finals[i] = T.traj[i]
+
+
+# -- the trajectory ------------------------------------------------------------------------
+
+@njit(**SOLVER_JIT)
+def _chunk(T, i):
+    """Point i integrates its trajectory on: as long as all it has run so far (at least
+    FIRST_CHUNK periods), or the periods the last attempt's monodromy says the motion
+    needs to come NEAR its orbit, within the budget: to its end, or short of it by
+    2 MAX_ORBIT_PERIOD periods at least (phase _TRANSIENT)."""
+    chunk = max(T.run[i], float(FIRST_CHUNK))
+    hint = T.hint[i]
+    if hint > 0:
+        chunk = min(max(hint, float(T.p[i])), 4 * chunk)
+    # (a motion that does not settle reports its last MAX_ORBIT_PERIOD periods: a chunk
+    # that ends short of the budget leaves twice that, room for an attempt of up to
+    # MAX_ORBIT_PERIOD periods and a last piece of trajectory as long as the report)
+    rest = T.rows[i, PARAM.max_periods] - T.run[i]
+    if chunk >= rest or rest <= 2 * MAX_ORBIT_PERIOD:
+        T.left[i] = rest
+    else:
+        T.left[i] = min(chunk, rest - 2 * MAX_ORBIT_PERIOD)
+
+
+@njit(**SOLVER_JIT)
+def _transient(T, i, m, f, strobes):
+    """The phase _TRANSIENT: a piece of point i's trajectory chunk was run (metrics ``m``,
+    end state ``f``, ``strobes``). Returns its next phase: _TRANSIENT while the chunk goes
+    on, _NEWTON for an attempt from where it got to, _DONE when it diverged or spent its
+    budget."""
+    T.touched[i] = _touched(T.rows[i], m)
+    T.run[i] += m[METRIC.periods_run]
+    T.left[i] -= m[METRIC.periods_run]
+    T.traj[i] = f
+    T.metrics[i] = m
+    T.strobes[i] = strobes
+    if not sane_run(m):
+        _diverge(T, i)
+        return _DONE
+    if T.run[i] >= T.rows[i, PARAM.max_periods]:
+        T.status[i] = STATUS.not_settled
+        T.finals[i] = T.traj[i]
+        return _DONE
+    # the engine's steady-state test passed: Newton polishes the orbit and gives its
+    # multipliers; where it cannot (a period map too rough for it), the orbit the test
+    # found stands (_give_up)
+    settled = m[METRIC.status] == STATUS.settled
+    if not settled and T.left[i] > 0:
+        return _TRANSIENT  # (the chunk goes on in the next round)
+    if settled:
+        T.tested[i] = True
+    # (a motion nearing a stable orbit along a multiplier near -1 repeats after twice its
+    # period better than after it, and Newton on that map, whose multiplier is then near
+    # +1, stalls: where the samples suggest twice the period of the orbit with contact it
+    # was last turned away from, the period is that orbit's)
+    suggested = _orbit_period(strobes, T.scale[i])
+    refused = T.refused[i]
+    if refused > 0 and suggested == 2 * refused:
+        suggested = refused
+    T.retry[i] = not settled and suggested == refused
+    T.refused[i] = 0
+    T.p[i] = int(m[METRIC.orbit_period]) if settled else suggested
+    _attempt(T, i)
+    return _NEWTON
+
+
+@njit(**SOLVER_JIT)
 def _orbit_period(strobes, scale):
-    """The orbit period suggested by a run's stroboscopic samples (..., SAMPLES, 3): the
+    """The orbit period suggested by a run's stroboscopic samples (SAMPLES, D): the
     smallest p whose repeat |y(nT) - y((n-p)T)| is within 10 times the best of any p."""
-    last = strobes[:, -1:, :]
-    gaps = norm(last - strobes[:, -2::-1][:, :MAX_ORBIT_PERIOD], scale[:, None, :])
-    gaps = np.where(np.isfinite(gaps), gaps, np.inf)
-    best = gaps.min(axis=1, keepdims=True)
-    within = gaps <= 10 * best
-    p = np.argmax(within, axis=1) + 1
-    return np.where(np.isfinite(best[:, 0]), p, 1)
+    gaps = np.empty(MAX_ORBIT_PERIOD)
+    best = np.inf
+    for k in range(MAX_ORBIT_PERIOD):
+        gap = norm(strobes[SAMPLES - 1] - strobes[SAMPLES - 2 - k], scale)
+        gaps[k] = gap if np.isfinite(gap) else np.inf
+        best = min(best, gaps[k])
+    if not np.isfinite(best):
+        return 1
+    for k in range(MAX_ORBIT_PERIOD):
+        if gaps[k] <= 10 * best:
+            return k + 1
+    return 1
 
 
-__all__ = ["Orbits", "on_its_way", "reach", "solve_orbits"]
+# -- error estimate and accuracy -------------------------------------------------------------
+
+@njit(**SOLVER_JIT)
+def _estimate(T, i, m, f, ok):
+    """The phase _ESTIMATE: quasi-Newton at twice the steps from point i's orbit, with its
+    monodromy. Returns its next phase: _ESTIMATE until the orbit at twice the steps is
+    located, then _DONE, or _NEWTON for a re-solve at a finer step where the estimate is
+    above the accuracy target (_refine)."""
+    size = T.scale.shape[1]
+    step = np.zeros(size)
+    size_ = np.inf
+    change = np.nan
+    if ok:
+        a = np.eye(size) - T.jacobian[i]
+        step = dense.solve_system(a, f[:size] - T.y[i, :size])
+        size_ = norm(step, T.scale[i])
+        change = halving_error(T.metrics[i], m)
+    # (or the run is near enough the orbit at twice the steps for the change it measures:
+    # where the map is not smooth at Newton's floor the iterates contract slowly, and four
+    # runs may not reach it)
+    converged = ok and (size_ <= T.floor[i] or size_ <= LOCATED * change)
+    T.iteration[i] += 1
+    last = not converged and T.iteration[i] >= ESTIMATE_RUNS
+    # at the last run, an estimate still not located but farther from the target than the
+    # run is from the finer orbit says whether the target is met (the metrics of a run
+    # move by about twice its start's distance, power being a square): where the map jumps
+    # near Newton's floor the iterates may stall short of LOCATED
+    decided = last and ok and abs(change - T.accuracy[i]) >= 2 * size_
+    converged = converged or decided
+    if last and not decided:
+        return _DONE
+    if not converged:
+        T.y[i, :size] += step
+        return _ESTIMATE
+    T.fine[i] = m
+    T.errors[i] = change
+    # the accuracy target: solve again at the step the fourth order asks for, or at twice
+    # the steps after a re-solve whose estimate fell slower than SLOW_ORDER
+    target = T.accuracy[i]
+    want = refined_steps(T.steps[i], change, target, T.coarser[i, 0], T.coarser[i, 1],
+                         T.refine[i])
+    if np.isfinite(target) and change > target and T.refine[i] < REFINEMENTS \
+            and want <= T.max_steps[i]:
+        _refine(T, i, want, step)
+        return _NEWTON
+    return _DONE
+
+
+@njit(**SOLVER_JIT)
+def _refine(T, i, steps, step):
+    """Set up the re-solve of point i at ``steps`` steps per period (at least
+    STEPS_QUANTUM more), from its orbit moved by ``step``, Newton's step towards the
+    orbit at twice the steps (phase _NEWTON)."""
+    size = T.scale.shape[1]
+    T.coarser[i, 0] = T.steps[i]
+    T.coarser[i, 1] = T.errors[i]
+    T.steps[i] = _larger(steps, T.steps[i] + STEPS_QUANTUM)
+    T.refine[i] += 1
+    T.y[i, :size] += step  # the orbit at twice the steps: closer
+    T.iteration[i] = 0
+    T.last[i] = np.inf
+    T.touched[i] = _touched(T.rows[i], T.metrics[i])
+    _first_run(T, i)
+
+
+# -- the compiled code's cache ---------------------------------------------------------------
+
+#: The modules whose compiled functions the solver's rounds are made from (the engine
+#: aside): numba checks a cached function against its own file alone, so the solver's are
+#: dropped together when any of these, or the engine, changes (_engine.cache).
+_COMPILED = (sys.modules[__name__], acceptance, accuracy, dense, period_map)
+_DIGEST = cache.source_digest(cache.ENGINE_SOURCES + tuple(
+    cache.PACKAGE / (m.__name__.split(".")[-1] + ".py") for m in _COMPILED))
+cache.flush_if_changed(_round, _COMPILED, _DIGEST)
+
+
+def compile_solver() -> None:
+    """Compile the solver and the engine, or load them from numba's on-disk cache, without
+    running a point (the table's types are the same for any size of the state)."""
+    period_map.compile_engine()
+    pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
+                  np.zeros(0, bool), np.zeros(0), np.zeros(0))
+    _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
+    _round(pts, 1)
+    _rounds(pts, 1, False)
+
+
+def solver_ready() -> bool:
+    """Whether the solver and the engine are in numba's on-disk cache (else the first solve
+    compiles them)."""
+    return period_map.engine_ready() and cache.is_warm(_round)
+
+
+__all__ = ["Orbits", "WORK", "compile_solver", "solve_orbits", "solver_ready"]

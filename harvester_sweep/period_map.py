@@ -18,9 +18,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from . import _engine
 from ._engine import METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
+from .jit import SOLVER_JIT
 from .models import tip_mass
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].
@@ -50,16 +52,42 @@ def state_size(rows) -> int:
     return N_STROBE if (np.asarray(rows)[:, PARAM.stop_ratio] > 0).any() else D
 
 
+#: The kind of scale of each component (models.state.Component.scale), coded for compiled
+#: code: 0 displacement, 1 velocity, 2 voltage.
+_SCALE_KINDS = tuple(("displacement", "velocity", "voltage").index(c.scale)
+                     for c in COMPONENTS)
+
+
+@njit(**SOLVER_JIT)
+def point_scales(row, x, v_peak, out):
+    """Write into ``out`` (size,) the component scales of an orbit of packed row ``row``
+    of displacement amplitude ``x`` [m] and peak voltage ``v_peak`` [V], by the kind of
+    scale the model declares for each of its first ``size`` components
+    (models.state.Component): x [m], w x [m/s], the larger of v_peak and the voltage of
+    that amplitude [V] (a moving stop's motion is measured against the tip's)."""
+    for c in range(out.shape[0]):
+        kind = _SCALE_KINDS[c]
+        if kind == 0:
+            out[c] = x
+        elif kind == 1:
+            out[c] = row[PARAM.v_per_x] * x
+        else:
+            voltage = row[PARAM.voltage_per_x] * x
+            out[c] = np.nan if v_peak != v_peak or voltage != voltage else max(v_peak, voltage)
+
+
 def orbit_scales(rows, x, v_peak, size=D):
-    """Component scales of orbits of displacement amplitude ``x`` [m] and peak voltage
-    ``v_peak`` [V] (packed rows (..., len(PARAM))), by the kind of scale the model declares
-    for each of its first ``size`` components (models.state.Component): x [m], w x
-    [m/s], the larger of v_peak and the voltage of that amplitude [V] (a moving stop's
-    motion is measured against the tip's)."""
-    w_x = rows[..., PARAM.v_per_x] * x
-    by_kind = {"displacement": x, "velocity": w_x,
-               "voltage": np.maximum(v_peak, rows[..., PARAM.voltage_per_x] * x)}
-    return np.stack([by_kind[c.scale] for c in COMPONENTS[:size]], axis=-1)
+    """:func:`point_scales` of packed rows (..., len(PARAM)) and amplitudes and peak
+    voltages that broadcast against them: (..., size)."""
+    rows = np.asarray(rows, dtype=float)
+    x, v_peak = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(v_peak, dtype=float))
+    shape = np.broadcast_shapes(rows.shape[:-1], x.shape)
+    rows = np.broadcast_to(rows, shape + rows.shape[-1:]).reshape(-1, rows.shape[-1])
+    x, v_peak = np.broadcast_to(x, shape).ravel(), np.broadcast_to(v_peak, shape).ravel()
+    out = np.empty((len(rows), size))
+    for k in range(len(rows)):
+        point_scales(np.ascontiguousarray(rows[k]), x[k], v_peak[k], out[k])
+    return out.reshape(shape + (size,))
 
 
 def copies_width(kind, D):
@@ -98,11 +126,13 @@ def monodromy(ends, scale):
                e[:, 1:D + 1], e[:, 2 * D + 1:3 * D + 1]]  # at -2h, -h, 0, h, 2h
         slopes = np.sort(np.diff(np.stack(row), axis=0), axis=0)
         diff, h = (slopes[1] + slopes[2]) / 2, CENTRAL * scale
-    elif e.shape[1] == copies_width("central", D):
-        diff, h = (e[:, 1:D + 1] - e[:, D + 1:]) / 2, CENTRAL * scale
-    else:
-        diff, h = e[:, 1:] - e[:, :1], PERTURBATION * scale
-    return diff.transpose(0, 2, 1) / h[:, None, :]
+        return diff.transpose(0, 2, 1) / h[:, None, :]
+    out = np.empty((len(e), D, D))
+    central = e.shape[1] == copies_width("central", D)
+    for k in range(len(e)):
+        copies_monodromy(np.ascontiguousarray(e[k]), np.ascontiguousarray(scale[k]), central,
+                         out[k])
+    return out
 
 
 def sorted_multipliers(jacobians):
@@ -125,6 +155,44 @@ def sane(metrics):
     divergence limit."""
     return (metrics[..., METRIC.status] != STATUS.diverged) \
         & np.isfinite(metrics[..., METRIC.power])
+
+
+@njit(**SOLVER_JIT)
+def sane_run(m):
+    """:func:`sane` of one metric row ``m``."""
+    return m[METRIC.status] != STATUS.diverged and np.isfinite(m[METRIC.power])
+
+
+@njit(**SOLVER_JIT)
+def copies_monodromy(ends, scale, central, out):
+    """Write into ``out`` (D, D) the monodromy from the end states ``ends`` (width, >= D)
+    of a state and its copies of :func:`perturbed_copies` with ``scale`` (D,): forward
+    differences, or ``central`` ones (as :func:`monodromy`)."""
+    n = scale.shape[0]
+    for c in range(n):
+        if central:
+            h = CENTRAL * scale[c]
+            for r in range(n):
+                out[r, c] = (ends[1 + c, r] - ends[1 + n + c, r]) / 2 / h
+        else:
+            h = PERTURBATION * scale[c]
+            for r in range(n):
+                out[r, c] = (ends[1 + c, r] - ends[0, r]) / h
+
+
+@njit(**SOLVER_JIT)
+def run_lanes(params, states, metrics, strobes, most):
+    """Run independent points (parameter rows ``params``, ``states`` updated in place,
+    outputs ``metrics`` and ``strobes`` as the engine's) in one engine call from compiled
+    code, on at most ``most`` threads, the engine's steady-state test on (it never ends a
+    run of MAX_ORBIT_PERIOD periods or fewer)."""
+    _engine.run_independent(params, states, metrics, strobes, True, most)
+
+
+@njit(**SOLVER_JIT)
+def free_monodromy_into(rows, steps, periods, out):
+    """:func:`contact_free_monodromy`, written into ``out`` (n, D, D), from compiled code."""
+    _engine.free_monodromy(rows, steps, periods, out)
 
 
 def contact_free_monodromy(rows, steps, periods):

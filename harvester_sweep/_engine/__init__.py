@@ -46,7 +46,7 @@ from .layouts import (
     STATUS,
 )
 from .monodromy import free_extent, free_monodromy
-from .scheduler import record_series, run_points, warm_up
+from .scheduler import record_series, run_independent, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
 
 cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, monodromy, rk4,
@@ -77,6 +77,7 @@ __all__ = [
     "free_extent",
     "free_monodromy",
     "record_series",
+    "run_independent",
     "run_points",
     "warm_up",
 ]

@@ -21,20 +21,20 @@ from pathlib import Path
 import numba
 
 _HERE = Path(__file__).parent
-_PACKAGE = _HERE.parent
+PACKAGE = _HERE.parent
 #: The source the lane engine's machine code is made from: its own files, the models it
 #: runs, the flags.
-_SOURCES = (_HERE, _PACKAGE / "models" / "hertz.py", _PACKAGE / "models" / "state.py",
-            _PACKAGE / "models" / "tip_mass.py", _PACKAGE / "jit.py")
+ENGINE_SOURCES = (_HERE, PACKAGE / "models" / "hertz.py", PACKAGE / "models" / "state.py",
+                  PACKAGE / "models" / "tip_mass.py", PACKAGE / "jit.py")
 
 
-def source_digest(sources=_SOURCES) -> str:
+def source_digest(sources=ENGINE_SOURCES) -> str:
     """SHA-256 of source files (folders: their ``*.py``, not below), in the order given
     and name order within a folder."""
     digest = hashlib.sha256()
     files = [p for s in sources for p in (sorted(s.glob("*.py")) if s.is_dir() else [s])]
     for path in files:
-        digest.update(path.relative_to(_PACKAGE).as_posix().encode() + b"\0"
+        digest.update(path.relative_to(PACKAGE).as_posix().encode() + b"\0"
                       + path.read_bytes())
     return digest.hexdigest()
 

@@ -189,15 +189,8 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     successors = (np.full(n, -1, dtype=np.int64) if successors is None
                   else np.ascontiguousarray(successors, dtype=np.int64))
     heads = _line_heads(successors, n)
-    # Lines taken largest budget (periods x steps of their first point) first, so that the
-    # long runs of a round of the orbit solver (1 to orbits.SLICE periods) do not start
-    # last and leave the other lanes idle; then by forcing period (stable: in the callers'
-    # order within one): the lanes of a group then hold points whose contacts come at
-    # about the same step of the period, so that fewer steps of a group run the contact
-    # stages.
-    work = params[heads, PARAM.max_periods] * params[heads, PARAM.steps]
-    heads = heads[np.lexsort((-params[heads, PARAM.period], -work))]
-    threads = call_threads(params, len(heads))
+    heads = _taking_order(params, heads)
+    threads = _threads(params, len(heads), numba.get_num_threads())
     control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
     args = (params, states, metrics, strobes, successors, heads, control, settle)
     if on_points is None:
@@ -244,10 +237,49 @@ def call_threads(params: np.ndarray, lines: int) -> int:
     """The threads a call of :func:`run_points` takes: one for a short call
     (SHORT_CALL), else one for every LANES lines (a thread steps LANES points at once, so
     a thread more gains nothing below that), at most numba's thread count."""
-    budget = float(np.sum(params[:, PARAM.max_periods] * params[:, PARAM.steps]))
+    return _threads(params, lines, numba.get_num_threads())
+
+
+@njit(**JIT)
+def _threads(params, lines, most):
+    """call_threads with ``most`` threads at most (numba's count, read by the caller:
+    reading it in compiled code keeps the code out of numba's cache)."""
+    budget = 0.0
+    for i in range(params.shape[0]):
+        budget += params[i, PARAM.max_periods] * params[i, PARAM.steps]
     if budget < SHORT_CALL:
         return 1
-    return max(1, min(numba.get_num_threads(), -(-lines // LANES)))
+    return max(1, min(most, -(-lines // LANES)))
+
+
+@njit(**JIT)
+def _taking_order(params, heads):
+    """``heads`` in the order lanes take them: largest budget (periods x steps of their
+    first point) first, so that the long runs of a round of the orbit solver (1 to
+    orbits.SLICE periods) do not start last and leave the other lanes idle; then by
+    forcing period (stable: in the callers' order within one): the lanes of a group then
+    hold points whose contacts come at about the same step of the period, so that fewer
+    steps of a group run the contact stages."""
+    period = np.empty(len(heads))
+    work = np.empty(len(heads))
+    for k in range(len(heads)):
+        period[k] = -params[heads[k], PARAM.period]
+        work[k] = -(params[heads[k], PARAM.max_periods] * params[heads[k], PARAM.steps])
+    by_period = np.argsort(period, kind="mergesort")
+    by_work = np.argsort(work[by_period], kind="mergesort")
+    return heads[by_period[by_work]]
+
+
+@njit(**JIT)
+def run_independent(params, states, metrics, strobes, settle, most):
+    """:func:`run_points` for points that are each a line of their own (no successors),
+    callable from compiled code, on at most ``most`` threads (numba's count, read by the
+    Python caller): the orbit solver's rounds."""
+    n = params.shape[0]
+    heads = _taking_order(params, np.arange(n))
+    control = np.zeros(_threads(params, n, most) + 2, dtype=np.int64)
+    _run_threads(params, states, metrics, strobes, np.full(n, -1, dtype=np.int64), heads,
+                 control, settle)
 
 
 def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:

@@ -33,7 +33,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ..jit import JIT
+from ..jit import JIT, SOLVER_JIT
 from . import hertz
 from .state import Component
 
@@ -189,19 +189,19 @@ def free_amplitude(A, w, wn2, cm, thm, irc, thc):
         return np.abs(A / (wn2 - w * w + 1j * w * cm + 1j * w * load))
 
 
-def excursion_bound(e, wn2, thm, thc):
-    """The largest displacement [m] a free, decaying motion from deviation ``e`` (..., 3)
-    [m, m/s, V] ever reaches, by energy: the homogeneous motion loses
+@njit(**SOLVER_JIT)
+def excursion_bound(x, v, voltage, wn2, thm, thc):
+    """The largest displacement [m] a free, decaying motion from deviation (``x``, ``v``,
+    ``voltage``) [m, m/s, V] ever reaches, by energy: the homogeneous motion loses
     ``E = (k x^2 + m v^2 + C_p V^2) / 2`` (``dE/dt = -c v^2 - V^2 / R``), so
     ``|x| <= sqrt(2 E / k)``; wn2 = k/m [1/s^2], thm = theta/m, thc = theta/C_p (their
     ratio is C_p/m; 0 for thc 0)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cv = np.where(thc != 0, thm / thc, 0.0)
-    return np.sqrt(e[..., 0] ** 2 + (e[..., 1] ** 2 + cv * e[..., 2] ** 2) / wn2)
+    cv = thm / thc if thc != 0 else 0.0
+    return np.sqrt(x * x + (v * v + cv * (voltage * voltage)) / wn2)
 
 
-def stop_excursion_bound(e, stop_wn2):
-    """The same bound [m] for a moving stop's own transient from its deviation ``e``
-    (..., 2) [m, m/s]: ``k_s x_s^2 + m_s v_s^2`` decays; stop_wn2 = k_s/m_s [1/s^2]."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.sqrt(e[..., 0] ** 2 + e[..., 1] ** 2 / stop_wn2)
+@njit(**SOLVER_JIT)
+def stop_excursion_bound(x, v, stop_wn2):
+    """The same bound [m] for a moving stop's own transient from its deviation (``x``,
+    ``v``) [m, m/s]: ``k_s x_s^2 + m_s v_s^2`` decays; stop_wn2 = k_s/m_s [1/s^2]."""
+    return np.sqrt(x * x + v * v / stop_wn2)

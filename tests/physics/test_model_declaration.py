@@ -98,7 +98,7 @@ def test_excursion_bound_contains_the_free_motion(preset):
         e = rng.normal(size=3) * np.array([1e-6, 1e-6 * math.sqrt(wn2), 1e-6 * thc])
         run = solve_ivp(lambda t, y: M @ y, (0, 20 * T), e, rtol=1e-10, atol=1e-20,
                         max_step=T / 50)
-        bound = tip_mass.excursion_bound(e, wn2, thm, thc)
+        bound = tip_mass.excursion_bound(*e, wn2, thm, thc)
         assert np.abs(run.y[0]).max() <= bound * (1 + 1e-9)
         assert np.abs(run.y[0]).max() >= 0.3 * bound  # a bound, not a blanket
 
