@@ -121,17 +121,13 @@ def _table(f: dict) -> str:
                     f"ensemble of {n}: engine per point, {row['threads']} threads / 1 thread | "
                     f"{row['engine'] * 1e3:.3f} ms / {row['engine_1'] * 1e3:.3f} ms | "
                     f"distance from the exact orbit {row['error']:.1e} |")
-        rows.append(f"| ... of which the engine's calls (the rest: the solver's Python around "
-                    f"them), in the fastest solve on {row['threads']} threads | "
-                    f"{row['calls'] * 1e3:.3f} ms | {row['calls'] / row['engine']:.0%} of it |")
         for key, name in (("lsoda", "SciPy LSODA, one point (1 core)"),
                           ("diffrax", f"JAX/diffrax Tsit5 vmap x{n} (XLA: 1 core busy)")):
             if key in row:
                 rows.append(f"| ... {name}, from rest until within the same distance "
                             f"({row[key + '_how']}) | "
                             f"{row[key] * 1e3:.2f} ms | **{row[key] / row['engine']:.0f} x** "
-                            f"the engine; {row[key] / row['engine_1']:.0f} x per core; "
-                            f"{row[key] / row['calls']:.0f} x the engine's calls alone |")
+                            f"the engine; {row[key] / row['engine_1']:.0f} x per core |")
             elif key == "diffrax" and "diffrax_skipped" in f:
                 rows.append(f"| ... {name} | skipped | {f['diffrax_skipped']} |")
     if "cold_start" in f:

@@ -133,10 +133,14 @@ def main() -> None:
                   f"| settled points | {settled_a} | {settled_b} | |",
                   f"| wall time per settled point | {1e3 * t0 / settled_a:.3f} ms | "
                   f"{1e3 * t1 / settled_b:.3f} ms | {t0 / settled_a / (t1 / settled_b):.1f} x |",
+                  ] + ([
                   f"| after's wall time in its {len(calls.spans)} engine calls (before / it) | "
                   f"| {calls.seconds:.2f} s | {t0 / calls.seconds:.1f} x |",
                   f"| ... in the solver's Python between them (before / end to end less it) | "
                   f"| {calls.between:.2f} s | {t0 / (t1 - calls.between):.1f} x |",
+                  ] if calls.spans else [  # (a compiled solver calls the engine from compiled code)
+                  "| after's engine calls | | not seen: its solver calls the engine from "
+                  "compiled code | |"]) + [
                   "", f"Largest relative difference of `power` where both settled on orbits "
                   f"of the same period ({int(both.sum())} points): {diff:.1e}.", ""]
 

@@ -47,7 +47,6 @@ from benchmarks.cases import (
     SWEEP_ROUNDS,
     sweep_spec,
 )
-from benchmarks.engine_calls import EngineCalls
 from harvester_sweep import _engine, packing, results
 from harvester_sweep._engine import lanes
 from harvester_sweep._engine.layouts import GROUP, LANE, LANES
@@ -160,13 +159,12 @@ def _error(state, exact) -> float:
 def test_engine_per_point(benchmark, figures, paper):
     """The periodic-orbit solver as a sweep point runs it (``results.solve``: Floquet
     multipliers, error estimate and accuracy target included), on all cores (its default)
-    and on one (numba.set_num_threads(1)), as SciPy and XLA run these baselines on one;
-    and the time of the engine's calls within the fastest solve on all cores."""
+    and on one (numba.set_num_threads(1)), as SciPy and XLA run these baselines on one."""
     p, exact, _ = paper
     packed = packing.pack_points([p] * ENSEMBLE)
     estimated = np.ones(ENSEMBLE, dtype=bool)
     threads = numba.get_num_threads()
-    times, out, calls = {}, {}, {}
+    times, out = {}, {}
 
     def run():
         for n in sorted({threads, 1}):
@@ -176,23 +174,19 @@ def test_engine_per_point(benchmark, figures, paper):
             # 1e-5 took 0.24 ms a point, median of 30 runs, against 0.14 back to back);
             # a sweep pays that once, not per point.
             results.solve(packed, estimated=estimated)
-            with EngineCalls(_engine) as engine:
-                solved = results.solve(packed, estimated=estimated)
+            solved = results.solve(packed, estimated=estimated)
             times.setdefault(n, []).append(solved.run_time)
-            calls.setdefault(n, []).append(engine.seconds)
             assert np.all(solved.finals == solved.finals[0])  # every lane the same bits
             out[n] = solved
         numba.set_num_threads(threads)
 
     benchmark.pedantic(run, rounds=ENGINE_ROUNDS, iterations=1)
-    fastest = int(np.argmin(times[threads]))
     solved = out[1]
     assert np.array_equal(solved.finals, out[threads].finals)  # and on any thread count
     assert solved.metrics[0, _engine.METRIC.status] == _engine.STATUS.settled
     figures["ensemble"] = ENSEMBLE
     figures.setdefault("points", {})[p["accuracy"]] = {
         "engine": min(times[threads]) / ENSEMBLE, "engine_1": min(times[1]) / ENSEMBLE,
-        "calls": calls[threads][fastest] / ENSEMBLE,
         "threads": threads, "error": _error(solved.finals[0], exact),
         "periods": int(solved.metrics[0, _engine.METRIC.periods_run]),
         "rk4_steps": int(solved.rk4_steps[0]), "steps": int(solved.steps[0])}

@@ -281,11 +281,14 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     linked = pts.successors[pts.successors >= 0]
     heads = np.ones(n, bool)
     heads[linked] = False
+    # (read here, which also starts numba's threads: compiled code calling the engine's
+    # parallel loop does not start them, and would crash; a count read in compiled code
+    # would keep that code out of numba's cache)
+    threads = numba.get_num_threads()
     guessed = pts.scale.shape[1] == N_RIGID  # (a moving stop's motion is not the tip's alone)
     extent = (period_map.contact_free_extent(rows, states, GUESS_STEPS) if guessed
               else np.zeros((n, 2)))
     _set_up(pts, _linear_amplitude(rows), guessed, extent, np.flatnonzero(heads))
-    threads = numba.get_num_threads()  # (read here: compiled code reading it is not cached)
     while True:
         done, left = _rounds(pts, threads, on_points is not None)
         assert left >= 0, "no point to run"
@@ -409,7 +412,7 @@ def _rounds(T, threads, one):
             return done, _counts(T)[0]
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _lanes(T, i):
     """Lanes of point i's next run: 0 for none, 1 alone, or with its copies (forward
     ones, or central ones both ways)."""
@@ -509,7 +512,7 @@ def _round(T, threads):
     return after - before
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _book_work(T, i, params, metrics, k, width):
     """Add the RK4 steps of point i's lanes k ... k + width to its work, by kind (WORK)."""
     phase = T.phase[i]
@@ -526,7 +529,7 @@ def _book_work(T, i, params, metrics, k, width):
         T.work[i, kind] += steps
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _enter(T, i, phase):
     """Point i goes on to ``phase``; a point done, or taken on its orbit, lets its
     successor start (once)."""
@@ -535,7 +538,7 @@ def _enter(T, i, phase):
         _release(T, i)
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _copies(T, i, m, central):
     """Whether point i's run with its copies (metric rows ``m``, its own first) took an
     affine map, and whether its monodromy is one to judge an orbit on."""
@@ -597,7 +600,7 @@ def _start(T, i):
         i = _pass_on(T, i)
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _release(T, i):
     """The successor of point i starts from its orbit (from its own initial state after a
     divergence), once."""
@@ -606,7 +609,7 @@ def _release(T, i):
         _start(T, following)
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _pass_on(T, i):
     """Hand point i's orbit to its successor, once: returns the successor to start, or -1."""
     if T.released[i]:
@@ -622,7 +625,7 @@ def _pass_on(T, i):
     return following
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _attempt(T, i):
     """Set up a Newton attempt from the trajectory's state (phase _NEWTON)."""
     size = T.scale.shape[1]
@@ -633,7 +636,7 @@ def _attempt(T, i):
     _first_run(T, i)
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _first_run(T, i):
     """Newton's first run from point i's iterate: where the motion was clear of the stops,
     it is likely to be too, so its centre lane alone, with the contact-free map's
@@ -761,7 +764,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     return phase
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _trajectory_ran(T, i, m, centre, strobes):
     """The first run of point i's attempt is its trajectory's next p periods (metrics
     ``m``, end state ``centre``, ``strobes``): the trajectory moves on (an orbit the
@@ -779,7 +782,7 @@ def _trajectory_ran(T, i, m, centre, strobes):
         T.strobes[i] = strobes
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _newton_step(T, i, m, centre, jac, ok):
     """Newton's step from point i's iterate to the fixed point of the map that ran it to
     ``centre`` with monodromy ``jac`` (where ``ok``): the component scales of the run (its
@@ -813,7 +816,7 @@ def _newton_step(T, i, m, centre, jac, ok):
     return scale, step, size_, good, floor
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _converged(T, i, m, centre, strobes, jac, scale, floor):
     """Point i's Newton iterates converged to a fixed point: solved again at a shorter
     period that closes the orbit too (_NEWTON), taken (_ESTIMATE, or _DONE without an
@@ -873,7 +876,7 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
     return _give_up(T, i)
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _give_up(T, i):
     """Point i's attempt did not give an orbit to take: integrate the trajectory on
     (_TRANSIENT), or _DONE: a re-solve at a finer step keeps the orbit and estimate it
@@ -895,7 +898,7 @@ def _give_up(T, i):
     return _DONE
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _diverge(T, i):
     """Point i diverged: done, its successor starts from its own state."""
     T.status[i] = STATUS.diverged
@@ -906,7 +909,7 @@ def _diverge(T, i):
 
 # -- the trajectory ------------------------------------------------------------------------
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _chunk(T, i):
     """Point i integrates its trajectory on: as long as all it has run so far (at least
     FIRST_CHUNK periods), or the periods the last attempt's monodromy says the motion
@@ -1034,7 +1037,7 @@ def _estimate(T, i, m, f, ok):
     return _DONE
 
 
-@njit(**SOLVER_JIT)
+@njit(inline="always", **SOLVER_JIT)
 def _refine(T, i, steps, step):
     """Set up the re-solve of point i at ``steps`` steps per period (at least
     STEPS_QUANTUM more), from its orbit moved by ``step``, Newton's step towards the
