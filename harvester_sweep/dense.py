@@ -1,12 +1,12 @@
 """Small dense algebra of the orbit solver: D x D monodromy matrices (D = 3, or 5 with a
 moving stop), one point at a time, compiled.
 
-Each function takes one matrix, so that the compiled solver calls it inside its loop
-over points, and the batched forms (``*_each``) give the same bits. Solves, inverses and
-determinants are Gaussian elimination with partial pivoting (LAPACK's getrf, unblocked),
-written out: at D = 3 a call through numba's LAPACK binding spends more on copies,
-checks and workspace than on the elimination. The spectral radius of a 3 x 3 matrix is its
-characteristic cubic's, taken from LAPACK where the solver's decisions are sensitive to it.
+Each function takes one matrix: the compiled solver calls it inside its loop over points.
+Solves, inverses and determinants are Gaussian elimination with partial pivoting
+(LAPACK's getrf, unblocked), written out: at D = 3 a call through numba's LAPACK binding
+spends more on copies, checks and workspace than on the elimination. The spectral radius
+of a 3 x 3 matrix is its characteristic cubic's, taken from LAPACK where the solver's
+decisions are sensitive to it.
 """
 
 from __future__ import annotations
@@ -186,57 +186,3 @@ def _cubic_radius(a):
     error = 8.0 * np.finfo(np.float64).eps * (size_p * radius * radius + size_q * radius
                                                + size_r) / slope
     return radius, error if np.isfinite(error) else np.inf
-
-
-@njit(**SOLVER_JIT)
-def det_each(a):
-    """det of each of ``a`` (n, D, D): (n,)."""
-    out = np.empty(a.shape[0])
-    for k in range(a.shape[0]):
-        out[k] = det(a[k])
-    return out
-
-
-@njit(**SOLVER_JIT)
-def inverse_each(a):
-    """inverse of each of ``a`` (n, D, D)."""
-    out = np.empty_like(a)
-    for k in range(a.shape[0]):
-        out[k] = inverse(a[k])
-    return out
-
-
-@njit(**SOLVER_JIT)
-def solve_each(a, b):
-    """solve_system for each of ``a`` (n, D, D) and ``b`` (n, D): (n, D)."""
-    out = np.empty_like(b)
-    for k in range(a.shape[0]):
-        out[k] = solve_system(a[k], b[k])
-    return out
-
-
-@njit(**SOLVER_JIT)
-def matvec_each(a, x):
-    """matvec for each of ``a`` (n, D, D) and ``x`` (n, D): (n, D)."""
-    out = np.empty_like(x)
-    for k in range(a.shape[0]):
-        out[k] = matvec(a[k], x[k])
-    return out
-
-
-@njit(**SOLVER_JIT)
-def row_sum_norm_each(a):
-    """row_sum_norm of each of ``a`` (n, D, D): (n,)."""
-    out = np.empty(a.shape[0])
-    for k in range(a.shape[0]):
-        out[k] = row_sum_norm(a[k])
-    return out
-
-
-@njit(**SOLVER_JIT)
-def spectral_radius_each(a):
-    """spectral_radius of each of ``a`` (n, D, D): (n,)."""
-    out = np.empty(a.shape[0])
-    for k in range(a.shape[0]):
-        out[k] = spectral_radius(a[k])
-    return out
