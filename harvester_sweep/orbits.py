@@ -142,62 +142,94 @@ _WAITING, _NEWTON, _TRANSIENT, _ESTIMATE, _DONE = range(5)
 #: error estimate's runs at twice the steps.
 WORK = ("trajectory", "newton", "forward_copies", "central_copies", "estimate")
 
-#: The points of one solve, each a small state machine (its phase) advanced one round of
-#: engine runs at a time by compiled code; every array is indexed by point, and every
-#: transition acts on each point apart, so that a point's result depends on its own
-#: numbers only.
+def _layout(name: str, fields: tuple):
+    """A named tuple of the offsets of ``fields`` ((name, meaning) pairs) in a row."""
+    cls = namedtuple(name, tuple(field for field, _ in fields))
+    cls.__doc__ = f"Offsets of {name}:\n" + "\n".join(f"- {f}: {m}" for f, m in fields)
+    return cls(*range(len(fields)))
+
+
+# The points of one solve, each a small state machine (its phase) advanced one round of
+# engine runs at a time by compiled code; every array is indexed by point, and every
+# transition acts on each point apart, so that a point's result depends on its own numbers
+# only. A point's numbers are rows of a few arrays, each laid out here once from named
+# fields: a compiled function takes the whole table, and numba compiles and calls a named
+# tuple of a few arrays much faster than one of a field per array.
+#: A point's real numbers (_Points.reals).
+_REAL = _layout("RealRow", (
+    ("run", "trajectory periods run"),
+    ("left", "periods of the trajectory's chunk still to run"),
+    ("hint", "periods the trajectory should run next (0: no idea)"),
+    ("last", "size of the last Newton correction [-]"),
+    ("floor", "Newton's floor at the orbit taken [-]"),
+    ("steps", "steps per period of the runs"),
+    ("orbit_steps", "steps per period of the orbit taken"),
+    ("errors", "step-halving error estimate [-]"),
+    ("accuracy", "error target [-], NaN where the step was given"),
+    ("max_steps", "most steps per period of a re-solve"),
+    ("coarser_steps", "steps per period of the last solve"),
+    ("coarser_error", "... and its error estimate [-]"),
+))
+#: A point's whole numbers (_Points.counts).
+_COUNT = _layout("CountRow", (
+    ("phase", "what the next run is (_WAITING ... _DONE)"),
+    ("rounds", "the round the point was done in"),
+    ("p", "orbit period tried"),
+    ("iteration", "Newton iteration of the attempt, or run of the estimate"),
+    ("refine", "re-solves at a finer step so far"),
+    ("t1_periods", "periods from t0 to t1"),
+    ("refused", "period of the stable orbit with contact last turned away (0: none)"),
+    ("status", "outcome (STATUS)"),
+    ("successors", "the point that starts from the point's orbit, -1 for none"),
+))
+#: A point's flags (_Points.flags).
+_FLAG = _layout("FlagRow", (
+    ("estimated", "given an error estimate"),
+    ("released", "successor started"),
+    ("tested", "the engine's steady-state test passed"),
+    ("retry", "the attempt is at the period of the orbit last turned away"),
+    ("chord", "the next iterate reuses the newton monodromy"),
+    ("affine", "... taken where no lane touched a stop"),
+    ("central", "the next copies run both ways"),
+    # the newton monodromy is one to judge an orbit on: by central differences, or of a map
+    # affine where it was taken (where forward differences are exact)
+    ("exact", "the newton monodromy may judge an orbit"),
+    # before any run: the linear motion's first period says whether it will
+    ("touched", "the run Newton starts from touched a stop"),
+    ("recheck", "the attempt's first run, again with copies"),
+))
+#: A point's states (_Points.states: (n, 4, len(STATE))).
+_STATES = _layout("States", (
+    ("begin", "start state: rest, or the predecessor's orbit"),
+    ("traj", "the trajectory's state"),
+    ("y", "Newton iterate, or the orbit under estimate"),
+    ("finals", "the state the point ended at"),
+))
+#: A point's vectors of the map's components (_Points.components: (n, 3, D)).
+_COMPONENTS = _layout("Components", (
+    ("t0", "trajectory state at the attempt's start"),
+    ("t1", "... and t1_periods periods later"),
+    ("scale", "component scales"),
+))
+#: A point's monodromies (_Points.jacobians: (n, 3, D, D)).
+_JACOBIANS = _layout("Jacobians", (
+    ("jacobian", "of the orbit taken"),
+    ("first_jacobian", "of each attempt's first run"),
+    ("newton_jacobian", "of the last copies, or the contact-free map's"),
+))
+#: A point's metric rows (_Points.metric_rows: (n, 2, len(METRIC))).
+_METRIC_ROWS = _layout("MetricRows", (
+    ("metrics", "of the orbit"),
+    ("fine", "... at twice the steps"),
+))
 _Points = namedtuple("_Points", (
     "rows",  # packed parameter rows (n, len(PARAM))
-    "successors",  # the point that starts from each point's orbit, -1 for none
-    "estimated",  # given an error estimate
-    "accuracy",  # error target [-], NaN where the step was given
-    "max_steps",  # most steps per period of a re-solve
-    "phase",  # what the next run is (_WAITING ... _DONE)
-    "begin",  # start state (rest, or the predecessor's orbit) (n, len(STATE))
-    "traj",  # the trajectory's state (n, len(STATE))
-    "run",  # trajectory periods run
-    "work",  # RK4 steps taken (n, len(WORK)), by kind
-    "rounds",  # the round each point was done in
-    "calls",  # rounds run (1,)
-    "steps",  # steps per period of the runs
-    "p",  # orbit period tried
-    "y",  # Newton iterate, or the orbit under estimate (n, len(STATE))
-    "iteration",  # Newton iteration of the attempt, or run of the estimate
-    "last",  # size of the last Newton correction
-    "refine",  # re-solves at a finer step so far
-    "t0",  # trajectory state at the attempt's start (n, D)
-    "t1",  # ... and t1_periods periods later (n, D)
-    "t1_periods",
-    "orbit_steps",  # steps per period of the orbit taken
-    "floor",  # Newton's floor at the orbit taken
-    "released",  # successors started
-    "hint",  # periods the trajectory should run next (0: no idea)
-    "left",  # periods of the trajectory's chunk still to run
-    "tested",  # the engine's steady-state test passed
-    "refused",  # period of the stable orbit with contact last turned away (0: none)
-    "retry",  # the attempt is at that period
-    "scale",  # component scales (n, D)
-    "jacobian",  # monodromy of the orbit taken (n, D, D)
-    "first_jacobian",  # ... of each attempt's first run
-    "newton_jacobian",  # ... of the last copies (or the contact-free map's)
-    "chord",  # the next iterate reuses newton_jacobian
-    "affine",  # ... taken where no lane touched a stop
-    "central",  # the next copies run both ways
-    # newton_jacobian is one to judge an orbit on: by central differences, or of a map
-    # affine where it was taken (where forward differences are exact)
-    "exact",
-    # the run Newton starts from touched a stop (before any run: the linear motion's first
-    # period says whether it will)
-    "touched",
-    "recheck",  # the attempt's first run, again with copies
-    "metrics",  # metric rows of the orbit (n, len(METRIC))
-    "fine",  # ... at twice the steps
+    "reals", "counts", "flags", "states", "components", "jacobians", "metric_rows",
     "strobes",  # stroboscopic samples of the last run (n, SAMPLES, D)
-    "finals",  # the state the point ended at (n, len(STATE))
-    "errors",  # step-halving error estimates [-]
-    "coarser",  # steps and error estimate of the last solve (n, 2)
-    "status",  # outcome (STATUS)
+    "work",  # RK4 steps taken (n, len(WORK)), by kind
+    "calls",  # rounds run (1,)
 ))
+
 
 @dataclass
 class Orbits:
@@ -278,14 +310,14 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
                   np.zeros(n, bool) if estimated is None else np.asarray(estimated, bool),
                   np.full(n, np.nan) if accuracy is None else np.asarray(accuracy, float),
                   np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float))
-    linked = pts.successors[pts.successors >= 0]
+    linked = pts.counts[pts.counts[:, _COUNT.successors] >= 0, _COUNT.successors]
     heads = np.ones(n, bool)
     heads[linked] = False
     # (read here, which also starts numba's threads: compiled code calling the engine's
     # parallel loop does not start them, and would crash; a count read in compiled code
     # would keep that code out of numba's cache)
     threads = numba.get_num_threads()
-    guessed = pts.scale.shape[1] == N_RIGID  # (a moving stop's motion is not the tip's alone)
+    guessed = pts.components.shape[2] == N_RIGID  # (a moving stop's motion is not the tip's alone)
     extent = (period_map.contact_free_extent(rows, states, GUESS_STEPS) if guessed
               else np.zeros((n, 2)))
     _set_up(pts, _linear_amplitude(rows), guessed, extent, np.flatnonzero(heads))
@@ -301,31 +333,27 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
 def _points(rows, states, successors, estimated, accuracy, max_steps) -> _Points:
     """The solve's points before any run: each waiting (_WAITING)."""
     n, size = len(rows), state_size(rows)
-
-    def full(value, *shape, dtype=float):
-        return np.full((n,) + shape, value, dtype=dtype)
-
+    reals = np.zeros((n, len(_REAL)))
+    reals[:, _REAL.last] = np.inf
+    reals[:, [_REAL.steps, _REAL.orbit_steps]] = rows[:, PARAM.steps, None]
+    reals[:, [_REAL.errors, _REAL.coarser_steps, _REAL.coarser_error]] = np.nan
+    reals[:, _REAL.accuracy], reals[:, _REAL.max_steps] = accuracy, max_steps
+    counts = np.zeros((n, len(_COUNT)), dtype=np.int64)
+    counts[:, _COUNT.phase] = _WAITING
+    counts[:, [_COUNT.p, _COUNT.t1_periods]] = 1
+    counts[:, _COUNT.status] = STATUS.not_settled
+    counts[:, _COUNT.successors] = successors
+    flags = np.zeros((n, len(_FLAG)), dtype=bool)
+    flags[:, _FLAG.estimated] = estimated
+    components = np.ones((n, len(_COMPONENTS), size))
+    components[:, _COMPONENTS.t0] = components[:, _COMPONENTS.t1] = states[:, :size]
     return _Points(
-        rows=rows, successors=successors.astype(np.int64), estimated=estimated,
-        accuracy=accuracy, max_steps=max_steps, phase=full(_WAITING, dtype=np.int64),
-        begin=states.copy(), traj=states.copy(), run=full(0.0), work=full(0.0, len(WORK)),
-        rounds=full(0, dtype=np.int64), calls=np.zeros(1, dtype=np.int64),
-        steps=rows[:, PARAM.steps].copy(),
-        p=full(1, dtype=np.int64), y=states.copy(), iteration=full(0, dtype=np.int64),
-        last=full(np.inf), refine=full(0, dtype=np.int64),
-        t0=states[:, :size].copy(), t1=states[:, :size].copy(),
-        t1_periods=full(1, dtype=np.int64), orbit_steps=rows[:, PARAM.steps].copy(),
-        floor=full(0.0), released=full(False, dtype=bool), hint=full(0.0), left=full(0.0),
-        tested=full(False, dtype=bool), refused=full(0, dtype=np.int64),
-        retry=full(False, dtype=bool), scale=full(1.0, size),
-        jacobian=full(np.nan, size, size), first_jacobian=full(np.nan, size, size),
-        newton_jacobian=full(np.nan, size, size), chord=full(False, dtype=bool),
-        affine=full(False, dtype=bool), central=full(False, dtype=bool),
-        exact=full(False, dtype=bool), touched=full(False, dtype=bool),
-        recheck=full(False, dtype=bool), metrics=full(np.nan, len(METRIC)),
-        fine=full(np.nan, len(METRIC)), strobes=full(np.nan, SAMPLES, size),
-        finals=states.copy(), errors=full(np.nan), coarser=full(np.nan, 2),
-        status=full(STATUS.not_settled, dtype=np.int64))
+        rows=rows, reals=reals, counts=counts, flags=flags,
+        states=np.repeat(states[:, None, :], len(_STATES), axis=1), components=components,
+        jacobians=np.full((n, len(_JACOBIANS), size, size), np.nan),
+        metric_rows=np.full((n, len(_METRIC_ROWS), len(METRIC)), np.nan),
+        strobes=np.full((n, SAMPLES, size), np.nan), work=np.zeros((n, len(WORK))),
+        calls=np.zeros(1, dtype=np.int64))
 
 
 def _linear_amplitude(rows):
@@ -341,28 +369,31 @@ def _linear_amplitude(rows):
 
 
 def _result(pts: _Points, samples: int) -> Orbits:
-    n, size = pts.scale.shape
-    metrics = pts.metrics.copy()
-    settled = pts.status == STATUS.settled
-    metrics[:, METRIC.status] = pts.status
-    metrics[:, METRIC.orbit_period] = np.where(settled, pts.p, 0)
-    metrics[:, METRIC.periods_run] = pts.run
+    n, size = len(pts.rows), pts.components.shape[2]
+    metrics = pts.metric_rows[:, _METRIC_ROWS.metrics].copy()
+    status, p = pts.counts[:, _COUNT.status], pts.counts[:, _COUNT.p]
+    settled = status == STATUS.settled
+    metrics[:, METRIC.status] = status
+    metrics[:, METRIC.orbit_period] = np.where(settled, p, 0)
+    metrics[:, METRIC.periods_run] = pts.reals[:, _REAL.run]
     multipliers = np.full((n, size), np.nan + 0j)
     if settled.any():
-        multipliers[settled] = sorted_multipliers(pts.jacobian[settled])
+        multipliers[settled] = sorted_multipliers(
+            pts.jacobians[settled, _JACOBIANS.jacobian])
     strobes = np.full((n, samples, size), np.nan)
     age = np.arange(samples)[::-1]  # periods before the end
     # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
-    p = np.where(settled, pts.p, SAMPLES)
+    p = np.where(settled, p, SAMPLES)
     back = np.where(settled[:, None], age[None, :] % p[:, None], age[None, :])
     valid = back < SAMPLES
     taken = np.take_along_axis(pts.strobes, (SAMPLES - 1 - back.clip(0, SAMPLES - 1))
                                [..., None].repeat(size, axis=2), axis=1)
     strobes[valid] = taken[valid]
     work = pts.work.astype(np.int64)
-    return Orbits(metrics, strobes, pts.finals, multipliers, pts.errors,
-                  pts.orbit_steps.astype(np.int64), work.sum(axis=1), pts.rounds.copy(),
-                  work)
+    return Orbits(metrics, strobes, pts.states[:, _STATES.finals].copy(), multipliers,
+                  pts.reals[:, _REAL.errors].copy(),
+                  pts.reals[:, _REAL.orbit_steps].astype(np.int64), work.sum(axis=1),
+                  pts.counts[:, _COUNT.rounds].copy(), work)
 
 
 # -- compiled: set-up and rounds ---------------------------------------------------------
@@ -373,9 +404,10 @@ def _set_up(T, amplitude, guessed, extent, heads):
     the stop), whether its motion touches a stop in its first period (where ``guessed``:
     from ``extent``, the linear motion's), and the lines' first points ``heads`` start."""
     for i in range(T.rows.shape[0]):
-        period_map.point_scales(T.rows[i], amplitude[i], 0.0, T.scale[i])
+        period_map.point_scales(T.rows[i], amplitude[i], 0.0,
+                                T.components[i, _COMPONENTS.scale])
         if guessed:
-            T.touched[i] = reaches_a_stop(T.rows[i], extent[i, 0], extent[i, 1])
+            T.flags[i, _FLAG.touched] = reaches_a_stop(T.rows[i], extent[i, 0], extent[i, 1])
     for i in heads:
         _start(T, i)
 
@@ -384,10 +416,10 @@ def _set_up(T, amplitude, guessed, extent, heads):
 def _counts(T):
     """Points not done yet, and of them those with a run to make."""
     left = running = 0
-    for i in range(T.phase.shape[0]):
-        if T.phase[i] != _DONE:
+    for i in range(T.counts.shape[0]):
+        if T.counts[i, _COUNT.phase] != _DONE:
             left += 1
-            running += T.phase[i] != _WAITING
+            running += T.counts[i, _COUNT.phase] != _WAITING
     return left, running
 
 
@@ -405,9 +437,9 @@ def _rounds(T, threads, one):
             return done, -1
         done += _round(T, threads)
         T.calls[0] += 1
-        for i in range(T.phase.shape[0]):
-            if T.phase[i] == _DONE and T.rounds[i] == 0:
-                T.rounds[i] = T.calls[0]
+        for i in range(T.counts.shape[0]):
+            if T.counts[i, _COUNT.phase] == _DONE and T.counts[i, _COUNT.rounds] == 0:
+                T.counts[i, _COUNT.rounds] = T.calls[0]
         if one:
             return done, _counts(T)[0]
 
@@ -416,11 +448,11 @@ def _rounds(T, threads, one):
 def _lanes(T, i):
     """Lanes of point i's next run: 0 for none, 1 alone, or with its copies (forward
     ones, or central ones both ways)."""
-    phase = T.phase[i]
+    phase = T.counts[i, _COUNT.phase]
     if phase == _NEWTON:
-        if T.chord[i]:
+        if T.flags[i, _FLAG.chord]:
             return 1
-        return 1 + T.scale.shape[1] * (2 if T.central[i] else 1)
+        return 1 + T.components.shape[2] * (2 if T.flags[i, _FLAG.central] else 1)
     return 1 if phase == _TRANSIENT or phase == _ESTIMATE else 0
 
 
@@ -428,24 +460,26 @@ def _lanes(T, i):
 def _round(T, threads):
     """Run every point's next request in one engine call and act on the results; returns
     the number of points that finished."""
-    n, size = T.scale.shape
+    n, _, size = T.components.shape
     first = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
         first[i + 1] = first[i] + _lanes(T, i)
     total = first[n]
     params = np.empty((total, T.rows.shape[1]))
-    states = np.empty((total, T.y.shape[1]))
+    states = np.empty((total, T.states.shape[2]))
     for i in range(n):
         width = first[i + 1] - first[i]
         if width == 0:
             continue
         k = first[i]
-        steps, periods, start = T.steps[i], float(T.p[i]), T.y[i]
-        if T.phase[i] == _TRANSIENT:
+        steps, periods = T.reals[i, _REAL.steps], float(T.counts[i, _COUNT.p])
+        start = T.states[i, _STATES.y]
+        if T.counts[i, _COUNT.phase] == _TRANSIENT:
             # (no slice shorter than MAX_ORBIT_PERIOD unless the whole chunk is: _chunk)
-            left = T.left[i]
-            periods, start = left if left < SLICE + MAX_ORBIT_PERIOD else SLICE, T.traj[i]
-        elif T.phase[i] == _ESTIMATE:
+            left = T.reals[i, _REAL.left]
+            periods = left if left < SLICE + MAX_ORBIT_PERIOD else SLICE
+            start = T.states[i, _STATES.traj]
+        elif T.counts[i, _COUNT.phase] == _ESTIMATE:
             steps = 2 * steps
         for w in range(width):
             params[k + w] = T.rows[i]
@@ -457,9 +491,9 @@ def _round(T, threads):
         if width > 1:  # copies, each moved along one component by its scale
             move = PERTURBATION if width == 1 + size else CENTRAL
             for c in range(size):
-                states[k + 1 + c, c] += move * T.scale[i, c]
+                states[k + 1 + c, c] += move * T.components[i, _COMPONENTS.scale, c]
                 if width > 1 + size:
-                    states[k + 1 + size + c, c] += -move * T.scale[i, c]
+                    states[k + 1 + size + c, c] += -move * T.components[i, _COMPONENTS.scale, c]
     metrics = np.empty((total, len(METRIC)))
     strobes = np.empty((total, SAMPLES, size))
     # (the engine's steady-state test ends a piece of the motion that settles; it never
@@ -468,8 +502,8 @@ def _round(T, threads):
     run_lanes(params, states, metrics, strobes, threads)
     before = 0
     for i in range(n):
-        before += T.phase[i] == _DONE
-    phases = T.phase.copy()
+        before += T.counts[i, _COUNT.phase] == _DONE
+    phases = T.counts[:, _COUNT.phase].copy()
     jac = np.empty((size, size))
     for i in range(n):
         k, width = first[i], first[i + 1] - first[i]
@@ -482,10 +516,11 @@ def _round(T, threads):
                 ok = ok and np.isfinite(states[k + w, c])
         _book_work(T, i, params, metrics, k, width)
         m, end, strobe = metrics[k], states[k], strobes[k]
-        if T.phase[i] == _NEWTON:
+        if T.counts[i, _COUNT.phase] == _NEWTON:
             if width > 1:
                 central = width > 1 + size
-                copies_monodromy(states[k:k + width], T.scale[i], central, jac)
+                copies_monodromy(states[k:k + width], T.components[i, _COMPONENTS.scale],
+                                 central, jac)
                 _copies(T, i, metrics[k:k + width], central)
                 # (in a re-solve at a finer step, a step by central differences is not
                 # compared with the last one, by forward differences: near grazing that
@@ -493,13 +528,13 @@ def _round(T, threads):
                 # contract ends the attempt, as it did: there it also turns away orbits
                 # the motion does not reach)
                 if central:
-                    T.central[i] = False
-                    if T.refine[i] > 0:
-                        T.last[i] = np.inf
+                    T.flags[i, _FLAG.central] = False
+                    if T.counts[i, _COUNT.refine] > 0:
+                        T.reals[i, _REAL.last] = np.inf
             else:
-                jac[:] = T.newton_jacobian[i]
+                jac[:] = T.jacobians[i, _JACOBIANS.newton_jacobian]
             phases[i] = _newton(T, i, m, end, strobe, jac.copy(), ok)
-        elif T.phase[i] == _TRANSIENT:
+        elif T.counts[i, _COUNT.phase] == _TRANSIENT:
             phases[i] = _transient(T, i, m, end, strobe)
         else:
             phases[i] = _estimate(T, i, m, end, ok)
@@ -508,14 +543,14 @@ def _round(T, threads):
             _enter(T, i, phases[i])
     after = 0
     for i in range(n):
-        after += T.phase[i] == _DONE
+        after += T.counts[i, _COUNT.phase] == _DONE
     return after - before
 
 
 @njit(inline="always", **SOLVER_JIT)
 def _book_work(T, i, params, metrics, k, width):
     """Add the RK4 steps of point i's lanes k ... k + width to its work, by kind (WORK)."""
-    phase = T.phase[i]
+    phase = T.counts[i, _COUNT.phase]
     for w in range(width):
         steps = metrics[k + w, METRIC.periods_run] * params[k + w, PARAM.steps]
         if phase == _ESTIMATE:
@@ -525,7 +560,7 @@ def _book_work(T, i, params, metrics, k, width):
         elif w == 0:
             kind = 1
         else:
-            kind = 2 if width == 1 + T.scale.shape[1] else 3
+            kind = 2 if width == 1 + T.components.shape[2] else 3
         T.work[i, kind] += steps
 
 
@@ -533,8 +568,8 @@ def _book_work(T, i, params, metrics, k, width):
 def _enter(T, i, phase):
     """Point i goes on to ``phase``; a point done, or taken on its orbit, lets its
     successor start (once)."""
-    T.phase[i] = phase
-    if phase == _DONE or T.status[i] == STATUS.settled:
+    T.counts[i, _COUNT.phase] = phase
+    if phase == _DONE or T.counts[i, _COUNT.status] == STATUS.settled:
         _release(T, i)
 
 
@@ -548,8 +583,8 @@ def _copies(T, i, m, central):
     for w in range(1, m.shape[0]):
         affine = affine and (row[PARAM.khm] == 0 or m[w, METRIC.impacts_per_period] == 0) \
             and (row[PARAM.lower_khm] == 0 or m[w, METRIC.impacts_per_period_lower] == 0)
-    T.affine[i] = affine
-    T.exact[i] = affine or central
+    T.flags[i, _FLAG.affine] = affine
+    T.flags[i, _FLAG.exact] = affine or central
 
 
 @njit(**SOLVER_JIT)
@@ -589,14 +624,14 @@ def _start(T, i):
     successor starts), the others make a Newton attempt from their initial state."""
     while i >= 0:
         if T.rows[i, PARAM.max_periods] > 0:
-            T.traj[i] = T.begin[i]
+            T.states[i, _STATES.traj] = T.states[i, _STATES.begin]
             _attempt(T, i)
-            T.phase[i] = _NEWTON
+            T.counts[i, _COUNT.phase] = _NEWTON
             return
-        T.metrics[i, :METRIC.orbit_period] = np.nan
-        T.status[i] = STATUS.too_stiff
-        T.finals[i] = T.begin[i]
-        T.phase[i] = _DONE
+        T.metric_rows[i, _METRIC_ROWS.metrics, :METRIC.orbit_period] = np.nan
+        T.counts[i, _COUNT.status] = STATUS.too_stiff
+        T.states[i, _STATES.finals] = T.states[i, _STATES.begin]
+        T.counts[i, _COUNT.phase] = _DONE
         i = _pass_on(T, i)
 
 
@@ -612,27 +647,29 @@ def _release(T, i):
 @njit(inline="always", **SOLVER_JIT)
 def _pass_on(T, i):
     """Hand point i's orbit to its successor, once: returns the successor to start, or -1."""
-    if T.released[i]:
+    if T.flags[i, _FLAG.released]:
         return -1
-    T.released[i] = True
-    following = T.successors[i]
+    T.flags[i, _FLAG.released] = True
+    following = T.counts[i, _COUNT.successors]
     if following < 0:
         return -1
-    if T.status[i] != STATUS.diverged:
-        T.begin[following] = T.finals[i]
-        T.touched[following] = _touched(T.rows[i], T.metrics[i])
-    T.p[following] = T.p[i] if T.status[i] == STATUS.settled else 1
+    if T.counts[i, _COUNT.status] != STATUS.diverged:
+        T.states[following, _STATES.begin] = T.states[i, _STATES.finals]
+        T.flags[following, _FLAG.touched] = _touched(T.rows[i],
+                                                     T.metric_rows[i, _METRIC_ROWS.metrics])
+    settled = T.counts[i, _COUNT.status] == STATUS.settled
+    T.counts[following, _COUNT.p] = T.counts[i, _COUNT.p] if settled else 1
     return following
 
 
 @njit(inline="always", **SOLVER_JIT)
 def _attempt(T, i):
     """Set up a Newton attempt from the trajectory's state (phase _NEWTON)."""
-    size = T.scale.shape[1]
-    T.y[i] = T.traj[i]
-    T.t0[i] = T.traj[i, :size]
-    T.iteration[i] = 0
-    T.last[i] = np.inf
+    size = T.components.shape[2]
+    T.states[i, _STATES.y] = T.states[i, _STATES.traj]
+    T.components[i, _COMPONENTS.t0] = T.states[i, _STATES.traj, :size]
+    T.counts[i, _COUNT.iteration] = 0
+    T.reals[i, _REAL.last] = np.inf
     _first_run(T, i)
 
 
@@ -641,12 +678,13 @@ def _first_run(T, i):
     """Newton's first run from point i's iterate: where the motion was clear of the stops,
     it is likely to be too, so its centre lane alone, with the contact-free map's
     monodromy (run again with copies if it touched after all); else with copies."""
-    T.chord[i] = T.central[i] = T.exact[i] = False
+    T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.central] = T.flags[i, _FLAG.exact] = False
     # (a moving stop's map is not the tip's alone)
-    if T.scale.shape[1] == N_RIGID and not T.touched[i]:
-        T.chord[i] = T.affine[i] = T.exact[i] = True
-        free_monodromy_into(T.rows[i:i + 1], T.steps[i:i + 1], T.p[i:i + 1],
-                            T.newton_jacobian[i:i + 1])
+    if T.components.shape[2] == N_RIGID and not T.flags[i, _FLAG.touched]:
+        T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.affine] = T.flags[i, _FLAG.exact] = True
+        free_monodromy_into(T.rows[i:i + 1], T.reals[i:i + 1, _REAL.steps],
+                            T.counts[i:i + 1, _COUNT.p],
+                            T.jacobians[i:i + 1, _JACOBIANS.newton_jacobian])
 
 
 # -- Newton --------------------------------------------------------------------------------
@@ -658,9 +696,9 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     chord step) and whether every lane ran sane and finite. Returns its next phase:
     _NEWTON for a next iterate (or the same one again, with copies), and those of a fixed
     point (_converged) or of an attempt given up (_give_up)."""
-    size = T.scale.shape[1]
+    size = T.components.shape[2]
     phase = _NEWTON
-    trajectory = T.iteration[i] == 0 and T.refine[i] == 0
+    trajectory = T.counts[i, _COUNT.iteration] == 0 and T.counts[i, _COUNT.refine] == 0
     if trajectory:
         _trajectory_ran(T, i, m, centre, strobes)
     diverged = trajectory and not sane_run(m)
@@ -668,7 +706,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
         _diverge(T, i)
         phase = _DONE
     ok = not diverged and lanes_ok
-    y = T.y[i, :size].copy()
+    y = T.states[i, _STATES.y, :size].copy()
     scale, step, size_, good, floor = _newton_step(T, i, m, centre, jac, ok)
     converged = good and size_ <= floor
     # an orbit with contact is not taken from beyond NEAR of it: not when the first step
@@ -681,85 +719,89 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     distance = _larger(size_, 0.5 * norm(centre[:size] - y, scale))
     # (a first run that touched a stop with the contact-free map's monodromy is run again
     # with copies, and judged then)
-    recheck = trajectory and T.chord[i] and T.affine[i] and touched and not diverged
-    opening = (trajectory and not recheck) or T.recheck[i]
-    T.recheck[i] = recheck
+    recheck = trajectory and T.flags[i, _FLAG.chord] and T.flags[i, _FLAG.affine] and touched \
+        and not diverged
+    opening = (trajectory and not recheck) or T.flags[i, _FLAG.recheck]
+    T.flags[i, _FLAG.recheck] = recheck
     # (a converged first run is judged by _converged, stable or not)
     looked = opening and good and touched and (distance > NEAR or not converged)
     radius = dense.spectral_radius(jac) if looked else 0.0
     # (not in an attempt at the period of the stable orbit with contact the last one
     # turned away: the motion nears that orbit, and the monodromy taken off it, by a
     # multiplier near -1, may expand)
-    far = looked and (distance > NEAR or (radius > EXPANDING and not T.retry[i]))
+    far = looked and (distance > NEAR or (radius > EXPANDING and not T.flags[i, _FLAG.retry]))
     # a later iterate of an attempt from the motion, whose run touched a stop, is given
     # up when Newton has come within SETTLING of an orbit beyond NEAR of the motion's
     # state at the attempt's start (on_its_way takes an orbit with contact from within
     # NEAR of it; the steps left add up to about this one)
     later = not opening and not trajectory and good and touched and not converged \
-        and T.refine[i] == 0 and size_ <= SETTLING and size_ <= 0.5 * T.last[i]
+        and T.counts[i, _COUNT.refine] == 0 and size_ <= SETTLING \
+        and size_ <= 0.5 * T.reals[i, _REAL.last]
     if later:
-        d0 = norm(T.t0[i] - (y + step), scale)
+        d0 = norm(T.components[i, _COMPONENTS.t0] - (y + step), scale)
         if d0 - size_ > NEAR:
             radius = dense.spectral_radius(jac)
             distance = d0
             far = True
     if far:
-        need = _periods_to_near(T.p[i], NEAR, distance, radius)
-        T.hint[i] = need if radius < 1 else 0.0
+        need = _periods_to_near(T.counts[i, _COUNT.p], NEAR, distance, radius)
+        T.reals[i, _REAL.hint] = need if radius < 1 else 0.0
     stalled = not converged and not diverged and (
-        not good or T.iteration[i] + 1 >= MAX_NEWTON
-        or (T.iteration[i] > 0 and size_ > 0.5 * T.last[i]))
+        not good or T.counts[i, _COUNT.iteration] + 1 >= MAX_NEWTON
+        or (T.counts[i, _COUNT.iteration] > 0 and size_ > 0.5 * T.reals[i, _REAL.last]))
     # in a re-solve at a finer step, an iterate that stalls within half the accuracy target
     # of its orbit is taken (its metrics then within about the target, power being a
     # square): where the map jumps near Newton's floor (by about its own error where a
     # switch crosses a step's end) the iterates stall short of it, and the re-solve kept
     # the coarser orbit, above the target; the error estimate that follows measures the
     # orbit as taken
-    enough = stalled and good and T.refine[i] > 0 and size_ <= 0.5 * T.accuracy[i]
+    enough = stalled and good and T.counts[i, _COUNT.refine] > 0 \
+        and size_ <= 0.5 * T.reals[i, _REAL.accuracy]
     converged = converged or enough
     stalled = stalled and not enough
     # a chord step that stalls, or that touched a stop with the monodromy of an affine run
     # (converged or not: that monodromy is not the orbit's), is taken again from the same
     # iterate, with copies
-    again = recheck or ((stalled or (T.affine[i] and touched)) and T.chord[i] and not far
-                        and not diverged and T.iteration[i] + 1 < MAX_NEWTON)
+    again = recheck or ((stalled or (T.flags[i, _FLAG.affine] and touched))
+                        and T.flags[i, _FLAG.chord] and not far and not diverged
+                        and T.counts[i, _COUNT.iteration] + 1 < MAX_NEWTON)
     # a converged orbit is judged, and its multipliers given, on a monodromy by central
     # differences (CENTRAL) where its map is not affine: the forward ones err by
     # PERTURBATION times the map's curvature; so its copies run again from the same
     # iterate, both ways
-    sharpen = converged and not again and not T.exact[i] and not diverged
+    sharpen = converged and not again and not T.flags[i, _FLAG.exact] and not diverged
     # (and in a re-solve at a finer step, which has no other way to its orbit, a chord step
     # that stalled had a monodromy too far off to contract: near grazing forward
     # differences can be, so it is taken again by central ones)
-    if sharpen or (again and stalled and T.refine[i] > 0):
-        T.central[i] = True
+    if sharpen or (again and stalled and T.counts[i, _COUNT.refine] > 0):
+        T.flags[i, _FLAG.central] = True
     again = again or sharpen
     converged = converged and not again
     failed = far or (stalled and not again)
     going = not converged and not failed and not diverged and not again
     if ok:
-        T.scale[i] = scale
+        T.components[i, _COMPONENTS.scale] = scale
     if opening:
-        T.first_jacobian[i] = jac
-    T.newton_jacobian[i] = jac
+        T.jacobians[i, _JACOBIANS.first_jacobian] = jac
+    T.jacobians[i, _JACOBIANS.newton_jacobian] = jac
     if again:
-        T.iteration[i] += 1
-        T.chord[i] = False
+        T.counts[i, _COUNT.iteration] += 1
+        T.flags[i, _FLAG.chord] = False
     # on: a new iterate, by a chord step where the monodromy is known there (the map is
     # affine where no lane touched a stop; elsewhere the iterate moved less than CHORD)
     if going:
-        T.y[i, :size] = y + step
-        T.y[i, size:] = centre[size:]
-        T.iteration[i] += 1
-        T.last[i] = size_
-        T.chord[i] = T.affine[i] or size_ <= CHORD
+        T.states[i, _STATES.y, :size] = y + step
+        T.states[i, _STATES.y, size:] = centre[size:]
+        T.counts[i, _COUNT.iteration] += 1
+        T.reals[i, _REAL.last] = size_
+        T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.affine] or size_ <= CHORD
         # (an iterate this near is likely the orbit: its copies run both ways at once)
-        T.central[i] = not T.chord[i] and size_ <= LAST_STEP
+        T.flags[i, _FLAG.central] = not T.flags[i, _FLAG.chord] and size_ <= LAST_STEP
     if converged:  # a fixed point; taken or not
         phase = _converged(T, i, m, centre, strobes, jac, scale, floor)
     if failed:  # integrate on (a re-solve keeps the orbit it had)
         if not far:
-            T.hint[i] = 0.0
+            T.reals[i, _REAL.hint] = 0.0
         phase = _give_up(T, i)
     return phase
 
@@ -769,16 +811,16 @@ def _trajectory_ran(T, i, m, centre, strobes):
     """The first run of point i's attempt is its trajectory's next p periods (metrics
     ``m``, end state ``centre``, ``strobes``): the trajectory moves on (an orbit the
     engine's steady-state test found is kept)."""
-    size = T.scale.shape[1]
-    T.touched[i] = _touched(T.rows[i], m)
-    T.t1[i] = centre[:size]
-    T.t1_periods[i] = T.p[i]
-    T.traj[i] = centre
-    T.run[i] += T.p[i]
-    if T.tested[i]:
-        T.traj[i] = T.y[i]
+    size = T.components.shape[2]
+    T.flags[i, _FLAG.touched] = _touched(T.rows[i], m)
+    T.components[i, _COMPONENTS.t1] = centre[:size]
+    T.counts[i, _COUNT.t1_periods] = T.counts[i, _COUNT.p]
+    T.states[i, _STATES.traj] = centre
+    T.reals[i, _REAL.run] += T.counts[i, _COUNT.p]
+    if T.flags[i, _FLAG.tested]:
+        T.states[i, _STATES.traj] = T.states[i, _STATES.y]
     else:
-        T.metrics[i] = m
+        T.metric_rows[i, _METRIC_ROWS.metrics] = m
         T.strobes[i] = strobes
 
 
@@ -789,15 +831,15 @@ def _newton_step(T, i, m, centre, jac, ok):
     own where ok, else the last), the step, its size relative to the scales (inf where
     I - M is singular), whether it was taken (``good``), and Newton's floor (the settle
     tolerance, or rounding times the conditioning of I - M)."""
-    size = T.scale.shape[1]
+    size = T.components.shape[2]
     xs = _larger(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]))
     scale = np.empty(size)
     period_map.point_scales(T.rows[i], xs if ok else 1.0, m[METRIC.v_peak] if ok else 1.0,
                             scale)
     for c in range(size):
         if not (ok and scale[c] > 0):
-            scale[c] = T.scale[i, c]
-    residual = centre[:size] - T.y[i, :size]
+            scale[c] = T.components[i, _COMPONENTS.scale, c]
+    residual = centre[:size] - T.states[i, _STATES.y, :size]
     step = np.zeros(size)
     cond = np.inf
     good = False
@@ -821,30 +863,30 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
     """Point i's Newton iterates converged to a fixed point: solved again at a shorter
     period that closes the orbit too (_NEWTON), taken (_ESTIMATE, or _DONE without an
     error estimate), or not taken (_give_up). Returns its next phase."""
-    size = T.scale.shape[1]
-    p = T.p[i]
-    y = T.y[i, :size].copy()
+    size = T.components.shape[2]
+    p = T.counts[i, _COUNT.p]
+    y = T.states[i, _STATES.y, :size].copy()
     # a shorter period that also closes the orbit: solve again at it
     shorter = 0
     for d in range(p - 1, 0, -1):
         if p % d == 0 and norm(strobes[SAMPLES - 1 - (p - d)] - y, scale) <= 10 * floor:
             shorter = d
     if shorter > 0:
-        T.p[i] = shorter
-        T.iteration[i] = 1  # (the trajectory already ran this attempt)
-        T.last[i] = np.inf
-        T.chord[i] = False
+        T.counts[i, _COUNT.p] = shorter
+        T.counts[i, _COUNT.iteration] = 1  # (the trajectory already ran this attempt)
+        T.reals[i, _REAL.last] = np.inf
+        T.flags[i, _FLAG.chord] = False
         return _NEWTON
     radius = dense.spectral_radius(jac)
     stable = radius < 1.0
-    refining = T.refine[i] > 0
+    refining = T.counts[i, _COUNT.refine] > 0
     row = T.rows[i]
     # (a moving stop comes at most stop_displacement_max towards the tip: 0 if rigid)
     xmax = _larger(m[METRIC.x_max], centre[STATE.x]) + m[METRIC.stop_displacement_max]
     xmin = _smaller(m[METRIC.x_min], centre[STATE.x])
     free = m[METRIC.impacts_per_period] == 0 and xmax < row[PARAM.gap] \
         and m[METRIC.impacts_per_period_lower] == 0 and xmin > -row[PARAM.lower_gap]
-    e = T.t0[i] - y
+    e = T.components[i, _COMPONENTS.t0] - y
     proved = never_reaches(row, xmax, xmin, e)
     linear = row[PARAM.khm] == 0 and row[PARAM.lower_khm] == 0  # (no stop at all)
     free = free or linear
@@ -852,27 +894,29 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
     near = NEAR
     on_way = False  # (asked where the orbit has contact)
     if not free:
-        q = max(T.t1_periods[i] // p, 1)  # (maps of p periods from t0 to t1)
+        q = max(T.counts[i, _COUNT.t1_periods] // p, 1)  # (maps of p periods from t0 to t1)
         near = reach(m, scale)
-        on_way = on_its_way(T.t0[i], T.t1[i], q, y, jac, scale, floor, near)
+        on_way = on_its_way(T.components[i, _COMPONENTS.t0], T.components[i, _COMPONENTS.t1],
+                            q, y, jac, scale, floor, near)
     if refining or (stable and (proved if free else on_way)):
-        T.metrics[i] = m
+        T.metric_rows[i, _METRIC_ROWS.metrics] = m
         T.strobes[i] = strobes
-        T.finals[i, :size] = y
-        T.finals[i, size:] = centre[size:]
-        T.y[i] = T.finals[i]
-        T.jacobian[i] = jac
-        T.orbit_steps[i] = T.steps[i]
-        T.floor[i] = floor
-        T.status[i] = STATUS.settled  # (its successor starts: need not wait for estimates)
-        if T.estimated[i]:
-            T.iteration[i] = 0
+        T.states[i, _STATES.finals, :size] = y
+        T.states[i, _STATES.finals, size:] = centre[size:]
+        T.states[i, _STATES.y] = T.states[i, _STATES.finals]
+        T.jacobians[i, _JACOBIANS.jacobian] = jac
+        T.reals[i, _REAL.orbit_steps] = T.reals[i, _REAL.steps]
+        T.reals[i, _REAL.floor] = floor
+        # (its successor starts: need not wait for estimates)
+        T.counts[i, _COUNT.status] = STATUS.settled
+        if T.flags[i, _FLAG.estimated]:
+            T.counts[i, _COUNT.iteration] = 0
             return _ESTIMATE
         return _DONE
     # not taken: integrate on for about the periods the motion needs to come near
     d0 = norm(e, scale)
-    T.hint[i] = _periods_to_near(p, near, d0, radius) if stable and d0 > near else 0.0
-    T.refused[i] = p if stable and not free else 0
+    T.reals[i, _REAL.hint] = _periods_to_near(p, near, d0, radius) if stable and d0 > near else 0.0
+    T.counts[i, _COUNT.refused] = p if stable and not free else 0
     return _give_up(T, i)
 
 
@@ -883,28 +927,28 @@ def _give_up(T, i):
     had; an orbit found by the engine's steady-state test stands, with the monodromy of
     the attempt's first run, at its state (not estimated: the orbit is not a fixed point
     to Newton); a budget spent ends the point not settled. Returns the next phase."""
-    if T.refine[i] > 0:
+    if T.counts[i, _COUNT.refine] > 0:
         return _DONE
-    if T.tested[i]:
-        T.status[i] = STATUS.settled
-        T.finals[i] = T.traj[i]
-        T.jacobian[i] = T.first_jacobian[i]
+    if T.flags[i, _FLAG.tested]:
+        T.counts[i, _COUNT.status] = STATUS.settled
+        T.states[i, _STATES.finals] = T.states[i, _STATES.traj]
+        T.jacobians[i, _JACOBIANS.jacobian] = T.jacobians[i, _JACOBIANS.first_jacobian]
         return _DONE
-    if T.run[i] < T.rows[i, PARAM.max_periods]:
+    if T.reals[i, _REAL.run] < T.rows[i, PARAM.max_periods]:
         _chunk(T, i)
         return _TRANSIENT
-    T.status[i] = STATUS.not_settled
-    T.finals[i] = T.traj[i]
+    T.counts[i, _COUNT.status] = STATUS.not_settled
+    T.states[i, _STATES.finals] = T.states[i, _STATES.traj]
     return _DONE
 
 
 @njit(inline="always", **SOLVER_JIT)
 def _diverge(T, i):
     """Point i diverged: done, its successor starts from its own state."""
-    T.status[i] = STATUS.diverged
-    T.metrics[i, :METRIC.orbit_period] = np.nan
+    T.counts[i, _COUNT.status] = STATUS.diverged
+    T.metric_rows[i, _METRIC_ROWS.metrics, :METRIC.orbit_period] = np.nan
     T.strobes[i] = np.nan
-    T.finals[i] = T.traj[i]
+    T.states[i, _STATES.finals] = T.states[i, _STATES.traj]
 
 
 # -- the trajectory ------------------------------------------------------------------------
@@ -915,18 +959,18 @@ def _chunk(T, i):
     FIRST_CHUNK periods), or the periods the last attempt's monodromy says the motion
     needs to come NEAR its orbit, within the budget: to its end, or short of it by
     2 MAX_ORBIT_PERIOD periods at least (phase _TRANSIENT)."""
-    chunk = max(T.run[i], float(FIRST_CHUNK))
-    hint = T.hint[i]
+    chunk = max(T.reals[i, _REAL.run], float(FIRST_CHUNK))
+    hint = T.reals[i, _REAL.hint]
     if hint > 0:
-        chunk = min(max(hint, float(T.p[i])), 4 * chunk)
+        chunk = min(max(hint, float(T.counts[i, _COUNT.p])), 4 * chunk)
     # (a motion that does not settle reports its last MAX_ORBIT_PERIOD periods: a chunk
     # that ends short of the budget leaves twice that, room for an attempt of up to
     # MAX_ORBIT_PERIOD periods and a last piece of trajectory as long as the report)
-    rest = T.rows[i, PARAM.max_periods] - T.run[i]
+    rest = T.rows[i, PARAM.max_periods] - T.reals[i, _REAL.run]
     if chunk >= rest or rest <= 2 * MAX_ORBIT_PERIOD:
-        T.left[i] = rest
+        T.reals[i, _REAL.left] = rest
     else:
-        T.left[i] = min(chunk, rest - 2 * MAX_ORBIT_PERIOD)
+        T.reals[i, _REAL.left] = min(chunk, rest - 2 * MAX_ORBIT_PERIOD)
 
 
 @njit(**SOLVER_JIT)
@@ -935,38 +979,38 @@ def _transient(T, i, m, f, strobes):
     end state ``f``, ``strobes``). Returns its next phase: _TRANSIENT while the chunk goes
     on, _NEWTON for an attempt from where it got to, _DONE when it diverged or spent its
     budget."""
-    T.touched[i] = _touched(T.rows[i], m)
-    T.run[i] += m[METRIC.periods_run]
-    T.left[i] -= m[METRIC.periods_run]
-    T.traj[i] = f
-    T.metrics[i] = m
+    T.flags[i, _FLAG.touched] = _touched(T.rows[i], m)
+    T.reals[i, _REAL.run] += m[METRIC.periods_run]
+    T.reals[i, _REAL.left] -= m[METRIC.periods_run]
+    T.states[i, _STATES.traj] = f
+    T.metric_rows[i, _METRIC_ROWS.metrics] = m
     T.strobes[i] = strobes
     if not sane_run(m):
         _diverge(T, i)
         return _DONE
-    if T.run[i] >= T.rows[i, PARAM.max_periods]:
-        T.status[i] = STATUS.not_settled
-        T.finals[i] = T.traj[i]
+    if T.reals[i, _REAL.run] >= T.rows[i, PARAM.max_periods]:
+        T.counts[i, _COUNT.status] = STATUS.not_settled
+        T.states[i, _STATES.finals] = T.states[i, _STATES.traj]
         return _DONE
     # the engine's steady-state test passed: Newton polishes the orbit and gives its
     # multipliers; where it cannot (a period map too rough for it), the orbit the test
     # found stands (_give_up)
     settled = m[METRIC.status] == STATUS.settled
-    if not settled and T.left[i] > 0:
+    if not settled and T.reals[i, _REAL.left] > 0:
         return _TRANSIENT  # (the chunk goes on in the next round)
     if settled:
-        T.tested[i] = True
+        T.flags[i, _FLAG.tested] = True
     # (a motion nearing a stable orbit along a multiplier near -1 repeats after twice its
     # period better than after it, and Newton on that map, whose multiplier is then near
     # +1, stalls: where the samples suggest twice the period of the orbit with contact it
     # was last turned away from, the period is that orbit's)
-    suggested = _orbit_period(strobes, T.scale[i])
-    refused = T.refused[i]
+    suggested = _orbit_period(strobes, T.components[i, _COMPONENTS.scale])
+    refused = T.counts[i, _COUNT.refused]
     if refused > 0 and suggested == 2 * refused:
         suggested = refused
-    T.retry[i] = not settled and suggested == refused
-    T.refused[i] = 0
-    T.p[i] = int(m[METRIC.orbit_period]) if settled else suggested
+    T.flags[i, _FLAG.retry] = not settled and suggested == refused
+    T.counts[i, _COUNT.refused] = 0
+    T.counts[i, _COUNT.p] = int(m[METRIC.orbit_period]) if settled else suggested
     _attempt(T, i)
     return _NEWTON
 
@@ -997,41 +1041,42 @@ def _estimate(T, i, m, f, ok):
     monodromy. Returns its next phase: _ESTIMATE until the orbit at twice the steps is
     located, then _DONE, or _NEWTON for a re-solve at a finer step where the estimate is
     above the accuracy target (_refine)."""
-    size = T.scale.shape[1]
+    size = T.components.shape[2]
     step = np.zeros(size)
     size_ = np.inf
     change = np.nan
     if ok:
-        a = np.eye(size) - T.jacobian[i]
-        step = dense.solve_system(a, f[:size] - T.y[i, :size])
-        size_ = norm(step, T.scale[i])
-        change = halving_error(T.metrics[i], m)
+        a = np.eye(size) - T.jacobians[i, _JACOBIANS.jacobian]
+        step = dense.solve_system(a, f[:size] - T.states[i, _STATES.y, :size])
+        size_ = norm(step, T.components[i, _COMPONENTS.scale])
+        change = halving_error(T.metric_rows[i, _METRIC_ROWS.metrics], m)
     # (or the run is near enough the orbit at twice the steps for the change it measures:
     # where the map is not smooth at Newton's floor the iterates contract slowly, and four
     # runs may not reach it)
-    converged = ok and (size_ <= T.floor[i] or size_ <= LOCATED * change)
-    T.iteration[i] += 1
-    last = not converged and T.iteration[i] >= ESTIMATE_RUNS
+    converged = ok and (size_ <= T.reals[i, _REAL.floor] or size_ <= LOCATED * change)
+    T.counts[i, _COUNT.iteration] += 1
+    last = not converged and T.counts[i, _COUNT.iteration] >= ESTIMATE_RUNS
     # at the last run, an estimate still not located but farther from the target than the
     # run is from the finer orbit says whether the target is met (the metrics of a run
     # move by about twice its start's distance, power being a square): where the map jumps
     # near Newton's floor the iterates may stall short of LOCATED
-    decided = last and ok and abs(change - T.accuracy[i]) >= 2 * size_
+    decided = last and ok and abs(change - T.reals[i, _REAL.accuracy]) >= 2 * size_
     converged = converged or decided
     if last and not decided:
         return _DONE
     if not converged:
-        T.y[i, :size] += step
+        T.states[i, _STATES.y, :size] += step
         return _ESTIMATE
-    T.fine[i] = m
-    T.errors[i] = change
+    T.metric_rows[i, _METRIC_ROWS.fine] = m
+    T.reals[i, _REAL.errors] = change
     # the accuracy target: solve again at the step the fourth order asks for, or at twice
     # the steps after a re-solve whose estimate fell slower than SLOW_ORDER
-    target = T.accuracy[i]
-    want = refined_steps(T.steps[i], change, target, T.coarser[i, 0], T.coarser[i, 1],
-                         T.refine[i])
-    if np.isfinite(target) and change > target and T.refine[i] < REFINEMENTS \
-            and want <= T.max_steps[i]:
+    target = T.reals[i, _REAL.accuracy]
+    want = refined_steps(T.reals[i, _REAL.steps], change, target,
+                         T.reals[i, _REAL.coarser_steps], T.reals[i, _REAL.coarser_error],
+                         T.counts[i, _COUNT.refine])
+    if np.isfinite(target) and change > target and T.counts[i, _COUNT.refine] < REFINEMENTS \
+            and want <= T.reals[i, _REAL.max_steps]:
         _refine(T, i, want, step)
         return _NEWTON
     return _DONE
@@ -1042,15 +1087,15 @@ def _refine(T, i, steps, step):
     """Set up the re-solve of point i at ``steps`` steps per period (at least
     STEPS_QUANTUM more), from its orbit moved by ``step``, Newton's step towards the
     orbit at twice the steps (phase _NEWTON)."""
-    size = T.scale.shape[1]
-    T.coarser[i, 0] = T.steps[i]
-    T.coarser[i, 1] = T.errors[i]
-    T.steps[i] = _larger(steps, T.steps[i] + STEPS_QUANTUM)
-    T.refine[i] += 1
-    T.y[i, :size] += step  # the orbit at twice the steps: closer
-    T.iteration[i] = 0
-    T.last[i] = np.inf
-    T.touched[i] = _touched(T.rows[i], T.metrics[i])
+    size = T.components.shape[2]
+    T.reals[i, _REAL.coarser_steps] = T.reals[i, _REAL.steps]
+    T.reals[i, _REAL.coarser_error] = T.reals[i, _REAL.errors]
+    T.reals[i, _REAL.steps] = _larger(steps, T.reals[i, _REAL.steps] + STEPS_QUANTUM)
+    T.counts[i, _COUNT.refine] += 1
+    T.states[i, _STATES.y, :size] += step  # the orbit at twice the steps: closer
+    T.counts[i, _COUNT.iteration] = 0
+    T.reals[i, _REAL.last] = np.inf
+    T.flags[i, _FLAG.touched] = _touched(T.rows[i], T.metric_rows[i, _METRIC_ROWS.metrics])
     _first_run(T, i)
 
 
