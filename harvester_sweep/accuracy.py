@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from ._engine import METRIC
+from .dense import larger
 from .jit import SOLVER_JIT
 
 #: Re-solves at a finer step for the accuracy target [-].
@@ -32,12 +33,6 @@ def _change(coarse, fine, scale):
 
 
 @njit(**SOLVER_JIT)
-def _larger(a, b):
-    """The larger of a and b, NaN if either is (numpy's maximum)."""
-    return np.nan if a != a or b != b else max(a, b)
-
-
-@njit(**SOLVER_JIT)
 def halving_error(coarse, fine):
     """Error estimate [-] of the metric row ``coarse`` of a run from the row ``fine`` of
     its rerun at twice the steps per period (engine metric rows).
@@ -48,10 +43,10 @@ def halving_error(coarse, fine):
     """
     amplitude = 0.5 * (fine[METRIC.x_max] - fine[METRIC.x_min])
     out = _change(coarse[METRIC.power], fine[METRIC.power], abs(fine[METRIC.power]))
-    out = _larger(out, _change(coarse[METRIC.v_peak], fine[METRIC.v_peak],
+    out = larger(out, _change(coarse[METRIC.v_peak], fine[METRIC.v_peak],
                                abs(fine[METRIC.v_peak])))
-    out = _larger(out, _change(coarse[METRIC.x_max], fine[METRIC.x_max], amplitude))
-    return _larger(out, _change(coarse[METRIC.x_min], fine[METRIC.x_min], amplitude))
+    out = larger(out, _change(coarse[METRIC.x_max], fine[METRIC.x_max], amplitude))
+    return larger(out, _change(coarse[METRIC.x_min], fine[METRIC.x_min], amplitude))
 
 
 @njit(**SOLVER_JIT)

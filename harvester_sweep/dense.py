@@ -1,7 +1,8 @@
 """Small dense algebra of the orbit solver: D x D monodromy matrices (D = 3, or 5 with a
 moving stop), one point at a time, compiled.
 
-Each function takes one matrix: the compiled solver calls it inside its loop over points.
+Each function takes one matrix (or one pair of numbers, as numpy's maximum and minimum take
+arrays): the compiled solver calls it inside its loop over points.
 Solves, inverses and determinants are Gaussian elimination with partial pivoting
 (LAPACK's getrf, unblocked), written out: at D = 3 a call through numba's LAPACK binding
 spends more on copies, checks and workspace than on the elimination. The spectral radius
@@ -15,6 +16,18 @@ import numpy as np
 from numba import njit
 
 from .jit import SOLVER_JIT
+
+
+@njit(**SOLVER_JIT)
+def larger(a, b):
+    """The larger of two numbers, NaN if either is (numpy's maximum, for one pair)."""
+    return np.nan if a != a or b != b else max(a, b)
+
+
+@njit(**SOLVER_JIT)
+def smaller(a, b):
+    """The smaller of two numbers, NaN if either is (numpy's minimum, for one pair)."""
+    return np.nan if a != a or b != b else min(a, b)
 
 
 @njit(**SOLVER_JIT)

@@ -597,18 +597,6 @@ def _touched(row, m):
 
 
 @njit(**SOLVER_JIT)
-def _larger(a, b):
-    """The larger of a and b, NaN if either is (numpy's maximum)."""
-    return np.nan if a != a or b != b else max(a, b)
-
-
-@njit(**SOLVER_JIT)
-def _smaller(a, b):
-    """The smaller of a and b, NaN if either is (numpy's minimum)."""
-    return np.nan if a != a or b != b else min(a, b)
-
-
-@njit(**SOLVER_JIT)
 def _periods_to_near(p, near, distance, radius):
     """Periods a motion ``distance`` from a stable orbit of period ``p`` and spectral
     radius ``radius`` needs to come to half ``near`` of it."""
@@ -716,7 +704,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     # monodromy at t), rather than pay the iterations. Nor when the monodromy at t expands
     # (EXPANDING): t is not in a stable orbit's linear regime
     touched = _touched(T.rows[i], m)
-    distance = _larger(size_, 0.5 * norm(centre[:size] - y, scale))
+    distance = dense.larger(size_, 0.5 * norm(centre[:size] - y, scale))
     # (a first run that touched a stop with the contact-free map's monodromy is run again
     # with copies, and judged then)
     recheck = trajectory and T.flags[i, _FLAG.chord] and T.flags[i, _FLAG.affine] and touched \
@@ -832,7 +820,7 @@ def _newton_step(T, i, m, centre, jac, ok):
     I - M is singular), whether it was taken (``good``), and Newton's floor (the settle
     tolerance, or rounding times the conditioning of I - M)."""
     size = T.components.shape[2]
-    xs = _larger(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]))
+    xs = dense.larger(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]))
     scale = np.empty(size)
     period_map.point_scales(T.rows[i], xs if ok else 1.0, m[METRIC.v_peak] if ok else 1.0,
                             scale)
@@ -854,7 +842,7 @@ def _newton_step(T, i, m, centre, jac, ok):
             step = scale * dense.matvec(inverse, residual / scale)
             cond = dense.row_sum_norm(inverse)
     size_ = norm(step, scale) if good else np.inf
-    floor = _larger(T.rows[i, PARAM.tolerance], ROUNDING * cond)
+    floor = dense.larger(T.rows[i, PARAM.tolerance], ROUNDING * cond)
     return scale, step, size_, good, floor
 
 
@@ -882,8 +870,8 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
     refining = T.counts[i, _COUNT.refine] > 0
     row = T.rows[i]
     # (a moving stop comes at most stop_displacement_max towards the tip: 0 if rigid)
-    xmax = _larger(m[METRIC.x_max], centre[STATE.x]) + m[METRIC.stop_displacement_max]
-    xmin = _smaller(m[METRIC.x_min], centre[STATE.x])
+    xmax = dense.larger(m[METRIC.x_max], centre[STATE.x]) + m[METRIC.stop_displacement_max]
+    xmin = dense.smaller(m[METRIC.x_min], centre[STATE.x])
     free = m[METRIC.impacts_per_period] == 0 and xmax < row[PARAM.gap] \
         and m[METRIC.impacts_per_period_lower] == 0 and xmin > -row[PARAM.lower_gap]
     e = T.components[i, _COMPONENTS.t0] - y
@@ -1090,7 +1078,7 @@ def _refine(T, i, steps, step):
     size = T.components.shape[2]
     T.reals[i, _REAL.coarser_steps] = T.reals[i, _REAL.steps]
     T.reals[i, _REAL.coarser_error] = T.reals[i, _REAL.errors]
-    T.reals[i, _REAL.steps] = _larger(steps, T.reals[i, _REAL.steps] + STEPS_QUANTUM)
+    T.reals[i, _REAL.steps] = dense.larger(steps, T.reals[i, _REAL.steps] + STEPS_QUANTUM)
     T.counts[i, _COUNT.refine] += 1
     T.states[i, _STATES.y, :size] += step  # the orbit at twice the steps: closer
     T.counts[i, _COUNT.iteration] = 0

@@ -2,9 +2,10 @@
 
 ``P^p: y(0) -> y(pT)`` is the stroboscopic map of the engine's own fixed-step RK4 with
 located contact switches. Every analysis reaches the engine through this module, the only
-one outside ``_engine`` that calls it: the orbit solver and continuation evaluate the map
-(:class:`Batch`: many requests, each alone or with its perturbed copies, in one engine
-call), scenes and basins record a point's steps (:func:`record`).
+one outside ``_engine`` that calls it: continuation evaluates the map (:class:`Batch`: many
+requests, each alone or with its perturbed copies, in one engine call), the compiled orbit
+solver through compiled entries (:func:`run_lanes`, :func:`free_monodromy_into`,
+:func:`copies_monodromy`), scenes and basins record a point's steps (:func:`record`).
 
 The monodromy ``dP^p/dy`` comes from perturbed copies of a state run beside it
 (:data:`COPIES`): ordinary points of the lane engine, the same RK4 with its switches
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from . import _engine
+from . import _engine, dense
 from ._engine import METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
 from .jit import SOLVER_JIT
 from .models import tip_mass
@@ -73,7 +74,7 @@ def point_scales(row, x, v_peak, out):
             out[c] = row[PARAM.v_per_x] * x
         else:
             voltage = row[PARAM.voltage_per_x] * x
-            out[c] = np.nan if v_peak != v_peak or voltage != voltage else max(v_peak, voltage)
+            out[c] = dense.larger(v_peak, voltage)
 
 
 def orbit_scales(rows, x, v_peak, size=D):

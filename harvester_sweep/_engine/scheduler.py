@@ -274,7 +274,9 @@ def _taking_order(params, heads):
 def run_independent(params, states, metrics, strobes, settle, most):
     """:func:`run_points` for points that are each a line of their own (no successors),
     callable from compiled code, on at most ``most`` threads (numba's count, read by the
-    Python caller): the orbit solver's rounds."""
+    Python caller): the orbit solver's rounds. numba's threads must have been started
+    (numba.get_num_threads, or a parallel function called from Python, starts them): a
+    parallel loop reached from compiled code does not start them, and crashes."""
     n = params.shape[0]
     heads = _taking_order(params, np.arange(n))
     control = np.zeros(_threads(params, n, most) + 2, dtype=np.int64)
