@@ -145,7 +145,7 @@ def spectral_radius(a):
     roots of its characteristic cubic (Numerical Recipes' real-coefficient form) where
     their error bound is within CUBIC_TRUST and the radius not within NEAR_ONE of 1;
     else LAPACK's (numba's complex solver: its real one refuses complex eigenvalues),
-    which costs about thirty times as much at D = 3. The cubic's coefficients carry the
+    which costs about forty times as much at D = 3. The cubic's coefficients carry the
     rounding of the entries' products, which a non-normal matrix makes large beside its
     eigenvalues, and its roots lose accuracy where they cluster: the bound says where."""
     if a.shape[0] == 3:

@@ -65,6 +65,7 @@ from numba import njit
 
 from . import acceptance, accuracy, dense, period_map
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, NO_STOP, PARAM, STATE, STATUS, cache
+from ._engine.layouts import layout
 from .acceptance import (
     NEAR,
     never_reaches,
@@ -77,11 +78,13 @@ from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
 from .jit import SOLVER_JIT
 from .models import tip_mass
 from .period_map import (
-    CENTRAL,
+    BOTH_WAYS,
+    FORWARD,
     PERTURBATION,
     ROUNDING,
     copies_monodromy,
     free_monodromy_into,
+    perturb,
     run_lanes,
     sane_run,
     sorted_multipliers,
@@ -141,13 +144,7 @@ _WAITING, _NEWTON, _TRANSIENT, _ESTIMATE, _DONE = range(5)
 #: trajectory's next p periods, included), the monodromy's forward and central copies, the
 #: error estimate's runs at twice the steps.
 WORK = ("trajectory", "newton", "forward_copies", "central_copies", "estimate")
-
-def _layout(name: str, fields: tuple):
-    """A named tuple of the offsets of ``fields`` ((name, meaning) pairs) in a row."""
-    cls = namedtuple(name, tuple(field for field, _ in fields))
-    cls.__doc__ = f"Offsets of {name}:\n" + "\n".join(f"- {f}: {m}" for f, m in fields)
-    return cls(*range(len(fields)))
-
+_TRAJECTORY_WORK, _NEWTON_WORK, _FORWARD_WORK, _CENTRAL_WORK, _ESTIMATE_WORK = range(len(WORK))
 
 # The points of one solve, each a small state machine (its phase) advanced one round of
 # engine runs at a time by compiled code; every array is indexed by point, and every
@@ -156,7 +153,7 @@ def _layout(name: str, fields: tuple):
 # fields: a compiled function takes the whole table, and numba compiles and calls a named
 # tuple of a few arrays much faster than one of a field per array.
 #: A point's real numbers (_Points.reals).
-_REAL = _layout("RealRow", (
+_REAL = layout("RealRow", (
     ("run", "trajectory periods run"),
     ("left", "periods of the trajectory's chunk still to run"),
     ("hint", "periods the trajectory should run next (0: no idea)"),
@@ -171,7 +168,7 @@ _REAL = _layout("RealRow", (
     ("coarser_error", "... and its error estimate [-]"),
 ))
 #: A point's whole numbers (_Points.counts).
-_COUNT = _layout("CountRow", (
+_COUNT = layout("CountRow", (
     ("phase", "what the next run is (_WAITING ... _DONE)"),
     ("rounds", "the round the point was done in"),
     ("p", "orbit period tried"),
@@ -183,7 +180,7 @@ _COUNT = _layout("CountRow", (
     ("successors", "the point that starts from the point's orbit, -1 for none"),
 ))
 #: A point's flags (_Points.flags).
-_FLAG = _layout("FlagRow", (
+_FLAG = layout("FlagRow", (
     ("estimated", "given an error estimate"),
     ("released", "successor started"),
     ("tested", "the engine's steady-state test passed"),
@@ -199,26 +196,26 @@ _FLAG = _layout("FlagRow", (
     ("recheck", "the attempt's first run, again with copies"),
 ))
 #: A point's states (_Points.states: (n, 4, len(STATE))).
-_STATES = _layout("States", (
+_STATES = layout("States", (
     ("begin", "start state: rest, or the predecessor's orbit"),
     ("traj", "the trajectory's state"),
     ("y", "Newton iterate, or the orbit under estimate"),
     ("finals", "the state the point ended at"),
 ))
 #: A point's vectors of the map's components (_Points.components: (n, 3, D)).
-_COMPONENTS = _layout("Components", (
+_COMPONENTS = layout("Components", (
     ("t0", "trajectory state at the attempt's start"),
     ("t1", "... and t1_periods periods later"),
     ("scale", "component scales"),
 ))
 #: A point's monodromies (_Points.jacobians: (n, 3, D, D)).
-_JACOBIANS = _layout("Jacobians", (
+_JACOBIANS = layout("Jacobians", (
     ("jacobian", "of the orbit taken"),
     ("first_jacobian", "of each attempt's first run"),
     ("newton_jacobian", "of the last copies, or the contact-free map's"),
 ))
 #: A point's metric rows (_Points.metric_rows: (n, 2, len(METRIC))).
-_METRIC_ROWS = _layout("MetricRows", (
+_METRIC_ROWS = layout("MetricRows", (
     ("metrics", "of the orbit"),
     ("fine", "... at twice the steps"),
 ))
@@ -488,12 +485,10 @@ def _round(T, threads):
             states[k + w] = start
             if w > 0:  # (the copies book no extrema: their end states alone are read)
                 params[k + w, PARAM.book] = 0.0
-        if width > 1:  # copies, each moved along one component by its scale
-            move = PERTURBATION if width == 1 + size else CENTRAL
-            for c in range(size):
-                states[k + 1 + c, c] += move * T.components[i, _COMPONENTS.scale, c]
-                if width > 1 + size:
-                    states[k + 1 + size + c, c] += -move * T.components[i, _COMPONENTS.scale, c]
+        if width == 1 + size:  # copies, each moved along one component by its scale
+            perturb(states[k:k + width], T.components[i, _COMPONENTS.scale], FORWARD)
+        elif width > 1:
+            perturb(states[k:k + width], T.components[i, _COMPONENTS.scale], BOTH_WAYS)
     metrics = np.empty((total, len(METRIC)))
     strobes = np.empty((total, SAMPLES, size))
     # (the engine's steady-state test ends a piece of the motion that settles; it never
@@ -533,7 +528,7 @@ def _round(T, threads):
                         T.reals[i, _REAL.last] = np.inf
             else:
                 jac[:] = T.jacobians[i, _JACOBIANS.newton_jacobian]
-            phases[i] = _newton(T, i, m, end, strobe, jac.copy(), ok)
+            phases[i] = _newton(T, i, m, end, strobe, jac, ok)
         elif T.counts[i, _COUNT.phase] == _TRANSIENT:
             phases[i] = _transient(T, i, m, end, strobe)
         else:
@@ -554,13 +549,13 @@ def _book_work(T, i, params, metrics, k, width):
     for w in range(width):
         steps = metrics[k + w, METRIC.periods_run] * params[k + w, PARAM.steps]
         if phase == _ESTIMATE:
-            kind = 4
+            kind = _ESTIMATE_WORK
         elif phase == _TRANSIENT:
-            kind = 0
+            kind = _TRAJECTORY_WORK
         elif w == 0:
-            kind = 1
+            kind = _NEWTON_WORK
         else:
-            kind = 2 if width == 1 + T.components.shape[2] else 3
+            kind = _FORWARD_WORK if width == 1 + T.components.shape[2] else _CENTRAL_WORK
         T.work[i, kind] += steps
 
 
@@ -1105,8 +1100,7 @@ def compile_solver() -> None:
     pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
                   np.zeros(0, bool), np.zeros(0), np.zeros(0))
     _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
-    _round(pts, 1)
-    _rounds(pts, 1, False)
+    _rounds(pts, 1, False)  # (and the _round it calls)
 
 
 def solver_ready() -> bool:

@@ -37,6 +37,8 @@ CENTRAL = 1e-7
 #: and the spread copies whose median slope steps over a jump of the map (monodromy) [-].
 COPIES = {"forward": (PERTURBATION,), "central": (CENTRAL, -CENTRAL),
           "spread": (CENTRAL, -CENTRAL, 2 * CENTRAL, -2 * CENTRAL)}
+#: The moves of the forward and the central copies, for compiled code (which reads no dict).
+FORWARD, BOTH_WAYS = COPIES["forward"], COPIES["central"]
 #: Newton's floor from rounding: a correction below this many rounding units of the
 #: period map, times the conditioning of I - M, is converged [-].
 ROUNDING = 100 * np.finfo(float).eps
@@ -101,15 +103,22 @@ def perturbed_copies(states, scale, kind="forward"):
     along one of its first D components by a move times ``scale`` (n, D), the D
     components in turn for each move: (n * copies_width(kind, D), len(STATE))
     (D = scale.shape[1])."""
-    D = scale.shape[1]
-    n = len(states)
-    moves = COPIES[kind]
-    width = copies_width(kind, D)
+    n, width = len(states), copies_width(kind, scale.shape[1])
     out = np.repeat(states, width, axis=0).reshape(n, width, states.shape[1])
-    for k, move in enumerate(moves):
-        for c in range(D):
-            out[:, 1 + k * D + c, c] += move * scale[:, c]
+    for k in range(n):
+        perturb(out[k], np.ascontiguousarray(scale[k]), COPIES[kind])
     return out.reshape(-1, states.shape[1])
+
+
+@njit(**SOLVER_JIT)
+def perturb(block, scale, moves):
+    """Move the copies ``block[1:]`` of the state ``block[0]`` (width, len(STATE)), each
+    along one of the first D components by a move of ``moves`` times ``scale`` (D,): the D
+    components in turn for each move (as :func:`perturbed_copies`)."""
+    size = scale.shape[0]
+    for k in range(len(moves)):
+        for c in range(size):
+            block[1 + k * size + c, c] += moves[k] * scale[c]
 
 
 def monodromy(ends, scale):
@@ -152,15 +161,23 @@ def multiplier_shift(coarse, fine) -> np.ndarray:
 
 
 def sane(metrics):
-    """Runs (metric rows (..., len(METRIC))) that neither diverged nor went beyond the
-    divergence limit."""
-    return (metrics[..., METRIC.status] != STATUS.diverged) \
-        & np.isfinite(metrics[..., METRIC.power])
+    """:func:`sane_run` of each of the metric rows (..., len(METRIC))."""
+    metrics = np.ascontiguousarray(metrics, dtype=float)
+    out = np.empty(metrics.shape[:-1], dtype=bool)
+    _sane_rows(metrics.reshape(-1, len(METRIC)), out.reshape(-1))
+    return out
+
+
+@njit(**SOLVER_JIT)
+def _sane_rows(rows, out):
+    for k in range(rows.shape[0]):
+        out[k] = sane_run(rows[k])
 
 
 @njit(**SOLVER_JIT)
 def sane_run(m):
-    """:func:`sane` of one metric row ``m``."""
+    """Whether a run (its metric row ``m``) neither diverged nor went beyond the divergence
+    limit."""
     return m[METRIC.status] != STATUS.diverged and np.isfinite(m[METRIC.power])
 
 

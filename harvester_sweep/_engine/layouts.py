@@ -18,7 +18,7 @@ from ..models import tip_mass
 from ..models.state import describe
 
 
-def _layout(name: str, fields: tuple, stride: int = 1):
+def layout(name: str, fields: tuple, stride: int = 1):
     """A named tuple of the offsets ``i * stride`` of ``fields`` ((name, meaning) pairs)."""
     names = tuple(field for field, _ in fields)
     cls = namedtuple(name, names)
@@ -29,7 +29,7 @@ def _layout(name: str, fields: tuple, stride: int = 1):
 
 #: A point's state (the model's, then a moving stop's, then the latched velocity); also the
 #: columns of a stroboscopic sample (all but the last).
-STATE = _layout("State", describe(tip_mass.STATE + tip_mass.STOP_STATE + (tip_mass.LATCHED,)))
+STATE = layout("State", describe(tip_mass.STATE + tip_mass.STOP_STATE + (tip_mass.LATCHED,)))
 #: Columns of a stroboscopic sample y(nT): the state without the latched velocity.
 N_STROBE = len(tip_mass.STATE) + len(tip_mass.STOP_STATE)
 #: Components of the period map of a point with a rigid stop: the model's (its stop stays
@@ -37,7 +37,7 @@ N_STROBE = len(tip_mass.STATE) + len(tip_mass.STOP_STATE)
 N_RIGID = len(tip_mass.STATE)
 
 #: A point's parameter row, as the engine reads it (made by harvester_sweep.packing).
-PARAM = _layout("ParameterRow", (
+PARAM = layout("ParameterRow", (
     ("amplitude", "base acceleration amplitude A [m/s^2]"),
     ("wn2", "k/m = wn^2 [1/s^2]"),
     ("cm", "c/m = 2 zeta wn [1/s]"),
@@ -77,7 +77,7 @@ NO_STOP = 1e300
 
 #: A point's metrics, in the engine's order; the names are the public ones
 #: (harvester_sweep.outputs describes each).
-METRIC = _layout("MetricRow", (
+METRIC = layout("MetricRow", (
     ("power", "mean V^2/R over the orbit [W]"),
     ("v_rms", "RMS voltage [V]"),
     ("v_peak", "peak |V| [V]"),
@@ -111,7 +111,7 @@ BOOKED_METRICS = (METRIC.v_peak, METRIC.power_peak, METRIC.x_max, METRIC.x_min,
 STATUS = namedtuple("Status", ("settled", "not_settled", "diverged", "too_stiff"))(0, 1, 2, 3)
 
 #: A recorded series: one row per step boundary.
-SERIES = _layout("SeriesRow", (
+SERIES = layout("SeriesRow", (
     ("x", "tip displacement [m]"),
     ("v", "tip velocity [m/s]"),
     ("voltage", "voltage across the load [V]"),
@@ -121,7 +121,7 @@ SERIES = _layout("SeriesRow", (
 ))
 
 #: Per-period accumulators, kept for the last MAX_ORBIT_PERIOD periods.
-ACC = _layout("Accumulators", (
+ACC = layout("Accumulators", (
     ("q", "int V^2 dt over the period [V^2 s]"),
     ("x_max", "largest x [m]"),
     ("x_min", "smallest x [m]"),
@@ -148,7 +148,7 @@ assert LANES == 2 * GROUP
 BLOCK = 4
 
 #: The lane table: one flat array of rows of LANES values, one row per field.
-LANE = _layout("LaneTable", (
+LANE = layout("LaneTable", (
     # the state of each lane's point...
     ("x", "displacement [m]"),
     ("v", "velocity [m/s]"),
