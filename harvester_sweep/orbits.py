@@ -1080,6 +1080,12 @@ def _refine(T, i, steps, step):
     T.reals[i, _REAL.last] = np.inf
     T.flags[i, _FLAG.touched] = _touched(T.rows[i], T.metric_rows[i, _METRIC_ROWS.metrics])
     _first_run(T, i)
+    # (its orbit lies between the coarser one and the one at twice the steps, where it
+    # starts: where those two are within LAST_STEP, its copies run both ways at once, as
+    # those of an iterate that near its orbit do)
+    moved = T.states[i, _STATES.y, :size] - T.states[i, _STATES.finals, :size]
+    T.flags[i, _FLAG.central] = not T.flags[i, _FLAG.chord] \
+        and norm(moved, T.components[i, _COMPONENTS.scale]) <= LAST_STEP
 
 
 # -- the compiled code's cache ---------------------------------------------------------------

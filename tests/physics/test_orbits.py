@@ -214,6 +214,26 @@ def test_accuracy_met_where_the_map_jumps_near_newtons_floor(point):
     assert error <= 2 * result.parameters["accuracy"]  # (the estimate is of it, to O(1))
 
 
+def test_a_re_solve_finds_the_orbit_and_multipliers_of_its_step():
+    """A point with contact whose automatic step missed the accuracy target is re-solved at
+    a finer step from the orbit its estimate located, its copies run both ways at once:
+    its orbit and Floquet multipliers are those a solve from rest finds with that step
+    given (Newton's floor, and central differences taken within 1e-7 of the orbit)."""
+    result = run_scene("strong_coupling", frequency=140.0, gap=1e-6)
+    m = result.metrics
+    assert result.parameters["steps_per_period"] < m["steps_per_period"]  # (was re-solved)
+    assert m["impacts_per_period"] > 0
+    given = run_scene("strong_coupling", frequency=140.0, gap=1e-6,
+                      steps_per_period=m["steps_per_period"]).metrics
+    assert m["orbit_period"] == given["orbit_period"]
+    for name in ("power", "v_peak", "x_max"):
+        assert m[name] == pytest.approx(given[name], rel=1e-9)
+    assert np.allclose(m["floquet_multipliers_real"], given["floquet_multipliers_real"],
+                       rtol=0, atol=1e-6)
+    assert np.allclose(m["floquet_multipliers_imag"], given["floquet_multipliers_imag"],
+                       rtol=0, atol=1e-6)
+
+
 def _grid(direction=None, n=24):
     gaps, freqs = np.linspace(0.25e-6, 4e-6, n), np.linspace(150.0, 300.0, n)
     freqs = freqs[::-1] if direction == "down" else freqs
