@@ -130,7 +130,7 @@ class ChunkStore:
         if digest != self.digest:
             raise ParameterError(
                 f"{self.dir} holds a partial result of another sweep (its grid, "
-                "parameters, options, package version or kernel differ): it cannot be "
+                "parameters, options, package version, engine or solver differ): it cannot be "
                 "resumed with this one; delete it to start over")
 
     def __enter__(self):

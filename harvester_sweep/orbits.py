@@ -1094,9 +1094,10 @@ def _refine(T, i, steps, step):
 #: aside): numba checks a cached function against its own file alone, so the solver's are
 #: dropped together when any of these, or the engine, changes (_engine.cache).
 _COMPILED = (sys.modules[__name__], acceptance, accuracy, dense, period_map)
-_DIGEST = cache.source_digest(cache.ENGINE_SOURCES + tuple(
+#: SHA-256 of the source the solver's numbers come from: the engine's and these modules'.
+SOURCE_DIGEST = cache.source_digest(cache.ENGINE_SOURCES + tuple(
     cache.PACKAGE / (m.__name__.split(".")[-1] + ".py") for m in _COMPILED))
-cache.flush_if_changed(_round, _COMPILED, _DIGEST)
+cache.flush_if_changed(_round, _COMPILED, SOURCE_DIGEST)
 
 
 def compile_solver() -> None:
@@ -1115,4 +1116,5 @@ def solver_ready() -> bool:
     return period_map.engine_ready() and cache.is_warm(_round)
 
 
-__all__ = ["Orbits", "WORK", "compile_solver", "solve_orbits", "solver_ready"]
+__all__ = ["SOURCE_DIGEST", "Orbits", "WORK", "compile_solver", "solve_orbits",
+           "solver_ready"]

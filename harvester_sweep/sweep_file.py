@@ -40,7 +40,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ._engine import SOURCE_DIGEST
 from .outputs import ENGINE_METRICS
 from .parameters import (
     DEFAULT_PRESET,
@@ -241,9 +240,10 @@ class SweepSpec:
             {
                 "version": __version__,
                 "model": self.model,
-                # Chunks made by another engine would not match: a development install
-                # changes the engine without changing the version.
-                "kernel_sha256": SOURCE_DIGEST if self.model == "tip_mass" else _beam_digest(),
+                # Chunks made by another engine or solver would not match: a development
+                # install changes them without changing the version.
+                "kernel_sha256": (_tip_mass_digest() if self.model == "tip_mass"
+                                  else _beam_digest()),
                 "preset": self.preset,
                 "parameters": self.base,
                 "grid": {name: _identity(values) for name, values in self.grid.items()},
@@ -259,6 +259,20 @@ class SweepSpec:
     def digest(self) -> str:
         """SHA-256 of :meth:`canonical`."""
         return hashlib.sha256(self.canonical().encode()).hexdigest()
+
+
+def _tip_mass_digest() -> str:
+    """SHA-256 of the source a tip-mass point's numbers come from: the engine's and the
+    orbit solver's (orbits.SOURCE_DIGEST), and the Python that resolves its parameters,
+    packs them and chooses its step."""
+    from ._engine import cache
+    from .orbits import SOURCE_DIGEST
+
+    here = Path(__file__).parent
+    python = cache.source_digest(tuple(here / name for name in (
+        "parameters.py", "packing.py", "timescales.py", "contact.py", "results.py",
+        "models/tip_mass.py", "models/hertz.py")))
+    return hashlib.sha256(f"{SOURCE_DIGEST} {python}".encode()).hexdigest()
 
 
 def _beam_digest() -> str:

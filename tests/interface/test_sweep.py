@@ -198,6 +198,31 @@ def test_a_partial_result_of_another_sweep_is_refused(tmp_path):
     assert partial.exists()
 
 
+def test_a_partial_result_of_another_orbit_solver_is_refused(tmp_path, monkeypatch):
+    """A development install changes the orbit solver without changing the version or the
+    engine: chunks it solved are not mixed with the new solver's."""
+    from harvester_sweep import orbits
+
+    sweep_dict = spec({"frequency": [140.0, 150.0]}, chunk_size=1)
+    out = tmp_path / "part.nc"
+    save = chunk_store.ChunkStore.save
+
+    def save_then_stop(self, chunk, result):
+        save(self, chunk, result)
+        raise Interrupted
+
+    monkeypatch.setattr(chunk_store.ChunkStore, "save", save_then_stop)
+    with pytest.raises(Interrupted):
+        run_sweep(sweep_dict, out, progress=False)
+    monkeypatch.setattr(chunk_store.ChunkStore, "save", save)
+    monkeypatch.setattr(orbits, "SOURCE_DIGEST", "0" * 64)
+    with pytest.raises(ParameterError, match="another sweep"):
+        run_sweep(sweep_dict, out, resume=True, progress=False)
+    monkeypatch.undo()
+    run_sweep(sweep_dict, out, resume=True, progress=False)  # (the same solver resumes it)
+    assert out.exists()
+
+
 def test_a_partial_result_with_another_grid_is_refused_by_the_cli(tmp_path, capsys,
                                                                   monkeypatch):
     first = tmp_path / "a.toml"
