@@ -153,22 +153,28 @@ class Interrupted(Exception):
     pass
 
 
+def _killed_after_one_chunk(sweep_dict, out, monkeypatch):
+    """Run ``sweep_dict`` to ``out`` as if killed right after its first chunk reached the
+    disk."""
+    save = chunk_store.ChunkStore.save
+
+    def save_then_stop(self, chunk, result):
+        save(self, chunk, result)
+        raise Interrupted
+
+    monkeypatch.setattr(chunk_store.ChunkStore, "save", save_then_stop)
+    with pytest.raises(Interrupted):
+        run_sweep(sweep_dict, out, progress=False)
+    monkeypatch.setattr(chunk_store.ChunkStore, "save", save)
+
+
 def test_resume_after_an_interruption_gives_the_uninterrupted_file(tmp_path, monkeypatch):
     sweep_dict = spec({"frequency": [200.0, 230.0, 260.0], "gap": [1e-6, 2e-6]},
                       directions=["up", "down"], chunk_size=3)  # 4 chunks of one line
     whole = run_sweep(sweep_dict, tmp_path / "whole.nc", progress=False)
 
     out = tmp_path / "part.nc"
-    save = chunk_store.ChunkStore.save
-
-    def save_then_stop(self, chunk, result):
-        save(self, chunk, result)
-        raise Interrupted  # as if killed right after the first chunk reached the disk
-
-    monkeypatch.setattr(chunk_store.ChunkStore, "save", save_then_stop)
-    with pytest.raises(Interrupted):
-        run_sweep(sweep_dict, out, progress=False)
-    monkeypatch.undo()
+    _killed_after_one_chunk(sweep_dict, out, monkeypatch)
     assert not out.exists()
     assert len(list((tmp_path / "part.nc.partial").glob("chunk_*.npz"))) == 1
 
@@ -205,16 +211,7 @@ def test_a_partial_result_of_another_orbit_solver_is_refused(tmp_path, monkeypat
 
     sweep_dict = spec({"frequency": [140.0, 150.0]}, chunk_size=1)
     out = tmp_path / "part.nc"
-    save = chunk_store.ChunkStore.save
-
-    def save_then_stop(self, chunk, result):
-        save(self, chunk, result)
-        raise Interrupted
-
-    monkeypatch.setattr(chunk_store.ChunkStore, "save", save_then_stop)
-    with pytest.raises(Interrupted):
-        run_sweep(sweep_dict, out, progress=False)
-    monkeypatch.setattr(chunk_store.ChunkStore, "save", save)
+    _killed_after_one_chunk(sweep_dict, out, monkeypatch)
     monkeypatch.setattr(orbits, "SOURCE_DIGEST", "0" * 64)
     with pytest.raises(ParameterError, match="another sweep"):
         run_sweep(sweep_dict, out, resume=True, progress=False)
