@@ -41,7 +41,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from benchmarks.cases import GRID
-from benchmarks.variants import provenance
+from benchmarks.variants import best, provenance
 from harvester_sweep import modal_map
 from harvester_sweep.beam_packing import pack_beam
 from harvester_sweep.beam_parameters import resolve_beam_parameters
@@ -70,17 +70,6 @@ ROUNDS = 3
 FULL_GRID_LIMIT = 0.0
 
 
-def _best(function, rounds):
-    """(best wall time [s], the last result) of ``rounds`` calls after an uncounted one."""
-    result = function()
-    best = math.inf
-    for _ in range(rounds):
-        start = time.perf_counter()
-        result = function()
-        best = min(best, time.perf_counter() - start)
-    return best, result
-
-
 def _period_map_time(points, sol, periods, rounds):
     """Wall time [s] of ``periods`` forcing periods of the period map for every point,
     from its settled state, at the steps the point chose."""
@@ -88,7 +77,7 @@ def _period_map_time(points, sol, periods, rounds):
                        float(sol.values["contact_step"][i])) for i, p in enumerate(points)]
     starts = np.array(sol.ends)
     counts = np.full(len(points), periods, dtype=np.int64)
-    return _best(lambda: modal_map.map_states(packs, starts, counts), rounds)[0]
+    return best(lambda: modal_map.map_states(packs, starts, counts), rounds)[0]
 
 
 def modes_table(modes, frequencies, rounds) -> list[str]:
@@ -100,7 +89,7 @@ def modes_table(modes, frequencies, rounds) -> list[str]:
         for n in modes:
             points = [resolve_beam_parameters(preset, n_modes=n, frequency=f, **extra)
                       for f in frequencies]
-            wall, sol = _best(lambda: solve_beam(points), rounds)
+            wall, sol = best(lambda: solve_beam(points), rounds)
             v = sol.values
             periods = float(np.sum(v["periods_run"]))
             per_map = _period_map_time(points, sol, MAP_PERIODS, rounds)
@@ -185,12 +174,12 @@ def scipy_section(periods, tolerances, rounds, limit) -> list[str]:
     for label, (preset, extra) in CASES.items():
         p = resolve_beam_parameters(preset, frequency=SCIPY_FREQUENCY, **extra)
         bs = system_of(p)
-        point_time, sol = _best(lambda: solve_beam([p]), rounds)
+        point_time, sol = best(lambda: solve_beam([p]), rounds)
         v = {name: float(values[0]) for name, values in sol.values.items()
              if np.ndim(values) == 1}
         y0 = np.asarray(sol.ends[0])
         pack = pack_beam(p, bs, int(v["steps_per_period"]), v["contact_step"])
-        engine_time, (end, _) = _best(
+        engine_time, (end, _) = best(
             lambda: modal_map.map_states([pack], y0[None], np.array([periods])), rounds * 3)
         start = time.perf_counter()
         ref_end, ref_power, ref_nfev = scipy_run(p, bs, y0, periods, "DOP853", REFERENCE_RTOL)

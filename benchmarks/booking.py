@@ -27,7 +27,8 @@ import harvester_sweep as hs
 from benchmarks.cases import FREE, GRID, STEPS_PER_PERIOD, sweep_spec
 from benchmarks.compare import POINTS, _per_period, _points
 from benchmarks.variants import cpu_model
-from harvester_sweep import _engine, orbits, results
+from benchmarks.work import Tally
+from harvester_sweep import _engine, orbits
 from harvester_sweep._engine import PARAM
 from harvester_sweep.packing import initial_state, pack_parameters
 from harvester_sweep.sweep_file import METRIC_OUTPUTS
@@ -44,27 +45,17 @@ def _sweep_rate(outputs) -> float:
 def _shares(grid, estimate: str) -> dict:
     """Fractions of a sweep's RK4 steps run by the Newton iterates (their centre lanes),
     their perturbed copies and the rest (motion, estimates), as the orbit solver books
-    them (``orbits.WORK``), from every solve of the sweep (``results.solve_orbits``
-    wrapped)."""
+    them (``orbits.WORK``), from every solve of the sweep (work.Tally)."""
     counts = dict.fromkeys(("Newton iterates", "perturbed copies", "motion and estimates"), 0.0)
-    solve = results.solve_orbits
     kinds = dict(zip(orbits.WORK, ("motion and estimates", "Newton iterates",
                                    "perturbed copies", "perturbed copies",
                                    "motion and estimates")))
-
-    def counted(*args, **kwargs):
-        out = solve(*args, **kwargs)
-        for kind, steps in zip(orbits.WORK, out.work_by_kind.sum(axis=0)):
-            counts[kinds[kind]] += float(steps)
-        return out
-
-    results.solve_orbits = counted
-    try:
-        spec = sweep_spec(grid)
-        spec["sweep"]["error_estimate"] = estimate
+    spec = sweep_spec(grid)
+    spec["sweep"]["error_estimate"] = estimate
+    with Tally() as tally:
         hs.run_sweep(spec, None, progress=False)
-    finally:
-        results.solve_orbits = solve
+    for kind, steps in tally.steps.items():
+        counts[kinds[kind]] += steps
     total = sum(counts.values())
     return {name: n / total for name, n in counts.items()}
 

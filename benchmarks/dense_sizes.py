@@ -18,20 +18,19 @@ modes). For each D this times, per matrix, over a batch of monodromy-like matric
 and, so that the cheaper way is also shown right, the worst relative residual
 |(I - M) x - b| / (|I - M| |x|) of each solve (its backward error) and the worst relative
 error of each radius against mpmath's eigenvalues at 40 digits (on the first
-``REFERENCE`` matrices of each size). Best of five runs, one thread.
+``REFERENCE`` matrices of each size). Best of five runs after an uncounted one, one thread.
 """
 
 from __future__ import annotations
 
 import argparse
-import time
 
 import mpmath
 import numba
 import numpy as np
 from numba import njit
 
-from benchmarks.variants import cpu_model, report
+from benchmarks.variants import best, provenance, report
 from harvester_sweep import dense
 
 SIZES = {3: "tip-mass model", 5: "moving stop", 11: "beam, bimorph_tip", 21: "beam, mak_rod"}
@@ -90,16 +89,6 @@ def _numpy_solves(a, b, out):
     out[:] = np.linalg.solve(a, b[..., None])[..., 0]
 
 
-def _best(call, *args) -> float:
-    call(*args)  # (compile)
-    times = []
-    for _ in range(REPEATS):
-        t = time.perf_counter()
-        call(*args)
-        times.append(time.perf_counter() - t)
-    return min(times)
-
-
 def _reference_radii(m) -> np.ndarray:
     """Spectral radii of ``m`` (k, D, D) from mpmath's eigenvalues at 40 digits."""
     with mpmath.workdps(40):
@@ -120,7 +109,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     numba.set_num_threads(1)
     lines = ["# Small dense algebra per matrix, by state size", "",
-             f"Machine: {cpu_model()}. Command: python -m benchmarks.dense_sizes", "",
+             f"{provenance()} Command: python -m benchmarks.dense_sizes", "",
              f"Per matrix, best of {REPEATS} runs over {BATCH} matrices, one thread; "
              "residual: worst |(I - M) x - b| / (|I - M| |x|); radius error: worst relative "
              f"error against mpmath's at 40 digits, first {REFERENCE} matrices.", "",
@@ -135,9 +124,11 @@ def main(argv=None) -> None:
         x_dense, x_lapack, x_numpy = (np.empty((BATCH, d)) for _ in range(3))
         r_dense, r_numpy = np.empty(BATCH), np.empty(BATCH)
         us = 1e6 / BATCH
-        t = [_best(_dense_solves, a, b, x_dense), _best(_lapack_solves, a, b, x_lapack),
-             _best(_numpy_solves, a, b, x_numpy), _best(_dense_radii, m, r_dense),
-             _best(_numpy_radii, m, r_numpy)]
+        t = [best(lambda call=call, args=args: call(*args), REPEATS)[0]
+             for call, args in ((_dense_solves, (a, b, x_dense)),
+                                (_lapack_solves, (a, b, x_lapack)),
+                                (_numpy_solves, (a, b, x_numpy)), (_dense_radii, (m, r_dense)),
+                                (_numpy_radii, (m, r_numpy)))]
         exact = _reference_radii(m[:REFERENCE])
         errors = [float(np.max(np.abs(r[:REFERENCE] - exact) / exact))
                   for r in (r_dense, r_numpy)]

@@ -79,6 +79,17 @@ def provenance() -> str:
             f"{platform.python_version()}.")
 
 
+def best(function, rounds):
+    """(best wall time [s], the last result) of ``rounds`` calls after an uncounted one."""
+    result = function()
+    fastest = math.inf
+    for _ in range(rounds):
+        start = time.perf_counter()
+        result = function()
+        fastest = min(fastest, time.perf_counter() - start)
+    return fastest, result
+
+
 def report(lines: list, output=None) -> None:
     """Print a benchmark's markdown ``lines``, and write them to ``output`` when given."""
     text = "\n".join(lines) + "\n"

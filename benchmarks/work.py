@@ -37,8 +37,8 @@ assert len(KINDS) == len(orbits.WORK)
 
 
 class Tally:
-    """Wraps results.solve_orbits while active: the RK4 steps of every solve, by kind, and
-    the rounds (engine calls) of the solves."""
+    """Wraps results.solve_orbits while active: the RK4 steps of every solve, by kind
+    (orbits.WORK), and the rounds (engine calls) of the solves."""
 
     def __init__(self):
         self.steps = collections.Counter()
@@ -50,7 +50,7 @@ class Tally:
 
         def counted(*args, **kwargs):
             out = solve(*args, **kwargs)
-            for kind, steps in zip(KINDS, out.work_by_kind.sum(axis=0)):
+            for kind, steps in zip(orbits.WORK, out.work_by_kind.sum(axis=0)):
                 tally.steps[kind] += float(steps)
             tally.rounds += int(out.rounds.max(initial=0))
             return out
@@ -110,7 +110,7 @@ def main(argv=None) -> None:
     for name, case in CASES.items():
         tally, points, steps = case()
         per = (steps or 1024) * points
-        cells = [f"{tally.steps[k] / per:.2f}" for k in KINDS]
+        cells = [f"{tally.steps[k] / per:.2f}" for k in orbits.WORK]
         lines.append(f"| {name} | " + " | ".join(cells)
                      + f" | {sum(tally.steps.values()) / per:.2f} | {tally.rounds} |")
     report(lines, args.output)

@@ -13,7 +13,6 @@ import numpy as np
 from numba import njit
 
 from ._engine import METRIC
-from .dense import larger
 from .jit import SOLVER_JIT
 
 #: Re-solves at a finer step for the accuracy target [-].
@@ -43,10 +42,10 @@ def halving_error(coarse, fine):
     """
     amplitude = 0.5 * (fine[METRIC.x_max] - fine[METRIC.x_min])
     out = _change(coarse[METRIC.power], fine[METRIC.power], abs(fine[METRIC.power]))
-    out = larger(out, _change(coarse[METRIC.v_peak], fine[METRIC.v_peak],
+    out = np.maximum(out, _change(coarse[METRIC.v_peak], fine[METRIC.v_peak],
                                abs(fine[METRIC.v_peak])))
-    out = larger(out, _change(coarse[METRIC.x_max], fine[METRIC.x_max], amplitude))
-    return larger(out, _change(coarse[METRIC.x_min], fine[METRIC.x_min], amplitude))
+    out = np.maximum(out, _change(coarse[METRIC.x_max], fine[METRIC.x_max], amplitude))
+    return np.maximum(out, _change(coarse[METRIC.x_min], fine[METRIC.x_min], amplitude))
 
 
 @njit(**SOLVER_JIT)

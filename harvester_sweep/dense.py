@@ -1,8 +1,7 @@
 """Small dense algebra of the orbit solver: D x D monodromy matrices (D = 3, or 5 with a
 moving stop), one point at a time, compiled.
 
-Each function takes one matrix (or one pair of numbers, as numpy's maximum and minimum take
-arrays): the compiled solver calls it inside its loop over points.
+Each function takes one matrix: the compiled solver calls it inside its loop over points.
 Solves, inverses and determinants are Gaussian elimination with partial pivoting
 (LAPACK's getrf, unblocked), written out: at D = 3 a call through numba's LAPACK binding
 spends more on copies, checks and workspace than on the elimination. The spectral radius
@@ -16,18 +15,6 @@ import numpy as np
 from numba import njit
 
 from .jit import SOLVER_JIT
-
-
-@njit(**SOLVER_JIT)
-def larger(a, b):
-    """The larger of two numbers, NaN if either is (numpy's maximum, for one pair)."""
-    return np.nan if a != a or b != b else max(a, b)
-
-
-@njit(**SOLVER_JIT)
-def smaller(a, b):
-    """The smaller of two numbers, NaN if either is (numpy's minimum, for one pair)."""
-    return np.nan if a != a or b != b else min(a, b)
 
 
 @njit(**SOLVER_JIT)
@@ -77,20 +64,18 @@ def _substitute(lu, order, b):
 
 
 @njit(**SOLVER_JIT)
-def det(a):
-    """Determinant of ``a`` (D, D)."""
-    lu, _, sign = _lu(a)
+def _det(lu, sign):
+    """The determinant from LU factors and the rows' order's sign."""
     out = sign
-    for k in range(a.shape[0]):
+    for k in range(lu.shape[0]):
         out *= lu[k, k]
     return out
 
 
 @njit(**SOLVER_JIT)
-def inverse(a):
-    """Inverse of ``a`` (D, D), non-singular."""
-    n = a.shape[0]
-    lu, order, _ = _lu(a)
+def _inverse(lu, order):
+    """The inverse from LU factors and the rows' order."""
+    n = lu.shape[0]
     out = np.empty((n, n))
     unit = np.zeros(n)
     for j in range(n):
@@ -98,6 +83,31 @@ def inverse(a):
         out[:, j] = _substitute(lu, order, unit)
         unit[j] = 0.0
     return out
+
+
+@njit(**SOLVER_JIT)
+def det(a):
+    """Determinant of ``a`` (D, D)."""
+    lu, _, sign = _lu(a)
+    return _det(lu, sign)
+
+
+@njit(**SOLVER_JIT)
+def inverse(a):
+    """Inverse of ``a`` (D, D), non-singular."""
+    lu, order, _ = _lu(a)
+    return _inverse(lu, order)
+
+
+@njit(**SOLVER_JIT)
+def det_and_inverse(a):
+    """Determinant of ``a`` (D, D) and, where it is not 0, its inverse (else NaN), from
+    one factorisation."""
+    lu, order, sign = _lu(a)
+    d = _det(lu, sign)
+    if d == 0.0:
+        return d, np.full(a.shape, np.nan)
+    return d, _inverse(lu, order)
 
 
 @njit(**SOLVER_JIT)

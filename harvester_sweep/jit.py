@@ -1,5 +1,5 @@
-"""How every compiled function (the models' and the engine's) is compiled: one set of numba
-options for all of them.
+"""How every compiled function is compiled: one set of numba options for the models' and
+the engine's (JIT), and plain IEEE arithmetic for the orbit solver's (SOLVER_JIT).
 
 Bit-for-bit reproducible whichever lane, group or thread runs a point: no reassociation
 (it would let a vector loop sum in another order than scalar code) and no approximate

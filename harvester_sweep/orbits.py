@@ -23,7 +23,7 @@ How, and why (docs/numerics.md, "Periodic orbits"):
   Where the run Newton starts from is expected to stay clear of the stops (the last run
   did; from rest, the motion without the stops says so: period_map.contact_free_extent), its first
   iterate is a chord step too, with the contact-free map's monodromy in closed form
-  (:func:`contact_free_monodromy`); if it touched after all, it is run again with copies.
+  (period_map.free_monodromy_into); if it touched after all, it is run again with copies.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
   first evaluation is also the trajectory's next p periods. A converged fixed point is
   taken only when it is stable (spectral radius below 1, by central differences) and the
@@ -217,7 +217,6 @@ _JACOBIANS = layout("Jacobians", (
 #: A point's metric rows (_Points.metric_rows: (n, 2, len(METRIC))).
 _METRIC_ROWS = layout("MetricRows", (
     ("metrics", "of the orbit"),
-    ("fine", "... at twice the steps"),
 ))
 _Points = namedtuple("_Points", (
     "rows",  # packed parameter rows (n, len(PARAM))
@@ -699,7 +698,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     # monodromy at t), rather than pay the iterations. Nor when the monodromy at t expands
     # (EXPANDING): t is not in a stable orbit's linear regime
     touched = _touched(T.rows[i], m)
-    distance = dense.larger(size_, 0.5 * norm(centre[:size] - y, scale))
+    distance = np.maximum(size_, 0.5 * norm(centre[:size] - y, scale))
     # (a first run that touched a stop with the contact-free map's monodromy is run again
     # with copies, and judged then)
     recheck = trajectory and T.flags[i, _FLAG.chord] and T.flags[i, _FLAG.affine] and touched \
@@ -815,7 +814,7 @@ def _newton_step(T, i, m, centre, jac, ok):
     I - M is singular), whether it was taken (``good``), and Newton's floor (the settle
     tolerance, or rounding times the conditioning of I - M)."""
     size = T.components.shape[2]
-    xs = dense.larger(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]))
+    xs = np.maximum(abs(m[METRIC.x_max]), abs(m[METRIC.x_min]))
     scale = np.empty(size)
     period_map.point_scales(T.rows[i], xs if ok else 1.0, m[METRIC.v_peak] if ok else 1.0,
                             scale)
@@ -831,13 +830,13 @@ def _newton_step(T, i, m, centre, jac, ok):
         for r in range(size):
             for c in range(size):
                 scaled[r, c] = ((1.0 if r == c else 0.0) - jac[r, c]) / scale[r] * scale[c]
-        good = abs(dense.det(scaled)) > 1e-12
+        d, inverse = dense.det_and_inverse(scaled)
+        good = abs(d) > 1e-12
         if good:
-            inverse = dense.inverse(scaled)
             step = scale * dense.matvec(inverse, residual / scale)
             cond = dense.row_sum_norm(inverse)
     size_ = norm(step, scale) if good else np.inf
-    floor = dense.larger(T.rows[i, PARAM.tolerance], ROUNDING * cond)
+    floor = np.maximum(T.rows[i, PARAM.tolerance], ROUNDING * cond)
     return scale, step, size_, good, floor
 
 
@@ -865,8 +864,8 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
     refining = T.counts[i, _COUNT.refine] > 0
     row = T.rows[i]
     # (a moving stop comes at most stop_displacement_max towards the tip: 0 if rigid)
-    xmax = dense.larger(m[METRIC.x_max], centre[STATE.x]) + m[METRIC.stop_displacement_max]
-    xmin = dense.smaller(m[METRIC.x_min], centre[STATE.x])
+    xmax = np.maximum(m[METRIC.x_max], centre[STATE.x]) + m[METRIC.stop_displacement_max]
+    xmin = np.minimum(m[METRIC.x_min], centre[STATE.x])
     free = m[METRIC.impacts_per_period] == 0 and xmax < row[PARAM.gap] \
         and m[METRIC.impacts_per_period_lower] == 0 and xmin > -row[PARAM.lower_gap]
     e = T.components[i, _COMPONENTS.t0] - y
@@ -1050,7 +1049,6 @@ def _estimate(T, i, m, f, ok):
     if not converged:
         T.states[i, _STATES.y, :size] += step
         return _ESTIMATE
-    T.metric_rows[i, _METRIC_ROWS.fine] = m
     T.reals[i, _REAL.errors] = change
     # the accuracy target: solve again at the step the fourth order asks for, or at twice
     # the steps after a re-solve whose estimate fell slower than SLOW_ORDER
@@ -1073,7 +1071,7 @@ def _refine(T, i, steps, step):
     size = T.components.shape[2]
     T.reals[i, _REAL.coarser_steps] = T.reals[i, _REAL.steps]
     T.reals[i, _REAL.coarser_error] = T.reals[i, _REAL.errors]
-    T.reals[i, _REAL.steps] = dense.larger(steps, T.reals[i, _REAL.steps] + STEPS_QUANTUM)
+    T.reals[i, _REAL.steps] = np.maximum(steps, T.reals[i, _REAL.steps] + STEPS_QUANTUM)
     T.counts[i, _COUNT.refine] += 1
     T.states[i, _STATES.y, :size] += step  # the orbit at twice the steps: closer
     T.counts[i, _COUNT.iteration] = 0

@@ -1,8 +1,9 @@
 """The period map: the engine's RK4 runs over whole forcing periods, and their Jacobian.
 
 ``P^p: y(0) -> y(pT)`` is the stroboscopic map of the engine's own fixed-step RK4 with
-located contact switches. Every analysis reaches the engine through this module, the only
-one outside ``_engine`` that calls it: continuation evaluates the map (:class:`Batch`: many
+located contact switches. Every analysis runs the engine through this module, the only
+one outside ``_engine`` that calls its entry points (the solver uses ``_engine``'s cache
+and layout helpers too): continuation evaluates the map (:class:`Batch`: many
 requests, each alone or with its perturbed copies, in one engine call), the compiled orbit
 solver through compiled entries (:func:`run_lanes`, :func:`free_monodromy_into`,
 :func:`copies_monodromy`), scenes and basins record a point's steps (:func:`record`).
@@ -11,7 +12,7 @@ The monodromy ``dP^p/dy`` comes from perturbed copies of a state run beside it
 (:data:`COPIES`): ordinary points of the lane engine, the same RK4 with its switches
 located, so that the matrix includes the contact switches without any saltation algebra.
 Clear of the stops the model is linear, and the monodromy has a closed form
-(:func:`contact_free_monodromy`).
+(:func:`contact_free_monodromy`; :func:`free_monodromy_into` from compiled code).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from . import _engine, dense
+from . import _engine
 from ._engine import METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
 from .jit import SOLVER_JIT
 from .models import tip_mass
@@ -76,7 +77,7 @@ def point_scales(row, x, v_peak, out):
             out[c] = row[PARAM.v_per_x] * x
         else:
             voltage = row[PARAM.voltage_per_x] * x
-            out[c] = dense.larger(v_peak, voltage)
+            out[c] = np.maximum(v_peak, voltage)
 
 
 def orbit_scales(rows, x, v_peak, size=D):
@@ -265,8 +266,6 @@ class Evaluation:
         in the map's components.
     jacobian : numpy.ndarray or None
         float64 (n, size, size): the monodromy from the copies; None without copies.
-    copy_metrics : numpy.ndarray or None
-        float64 (n, width - 1, len(METRIC)): the copies' metrics (they book no extrema).
     work : numpy.ndarray
         float64 (n,): RK4 steps run for the point, copies included.
     """
@@ -276,7 +275,6 @@ class Evaluation:
     strobes: np.ndarray
     ok: np.ndarray
     jacobian: np.ndarray | None
-    copy_metrics: np.ndarray | None
     work: np.ndarray
 
 
@@ -350,7 +348,7 @@ class Batch:
             copied = width > 1
             out.append(Evaluation(
                 m[:, 0], f[:, 0], strobes[part][::width], ok,
-                monodromy(f, scale) if copied else None, m[:, 1:] if copied else None,
+                monodromy(f, scale) if copied else None,
                 work[part].reshape(n, width).sum(axis=1)))
             start += len(r)
         self._requests = []

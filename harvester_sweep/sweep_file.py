@@ -261,32 +261,33 @@ class SweepSpec:
         return hashlib.sha256(self.canonical().encode()).hexdigest()
 
 
+def _digest(compiled: str, names: tuple) -> str:
+    """SHA-256 of a compiled digest and of the package's files ``names``."""
+    from ._engine import cache
+
+    python = cache.source_digest(tuple(Path(__file__).parent / name for name in names))
+    return hashlib.sha256(f"{compiled} {python}".encode()).hexdigest()
+
+
 def _tip_mass_digest() -> str:
     """SHA-256 of the source a tip-mass point's numbers come from: the engine's and the
-    orbit solver's (orbits.SOURCE_DIGEST), and the Python that resolves its parameters,
-    packs them and chooses its step."""
-    from ._engine import cache
+    orbit solver's (orbits.SOURCE_DIGEST, the model's declaration included), and the
+    Python that resolves its parameters, packs them and chooses its step."""
     from .orbits import SOURCE_DIGEST
 
-    here = Path(__file__).parent
-    python = cache.source_digest(tuple(here / name for name in (
-        "parameters.py", "packing.py", "timescales.py", "contact.py", "results.py",
-        "models/tip_mass.py", "models/hertz.py")))
-    return hashlib.sha256(f"{SOURCE_DIGEST} {python}".encode()).hexdigest()
+    return _digest(SOURCE_DIGEST, ("parameters.py", "packing.py", "timescales.py",
+                                   "contact.py", "results.py"))
 
 
 def _beam_digest() -> str:
     """SHA-256 of the source a beam point's numbers come from: the modal engine's, and the
     Python that chooses its steps, solves its orbit (Newton on the period map, the step
     halvings) and measures it, which for the beam is most of the method."""
-    from ._engine import cache
     from ._engine.modal import SOURCE_DIGEST as MODAL_DIGEST
 
-    here = Path(__file__).parent
-    python = cache.source_digest(tuple(here / name for name in (
-        "beam_runs.py", "beam_packing.py", "modal_map.py", "bimorph.py", "rod.py",
-        "materials.py", "contact.py", "beam_parameters.py", "models/beam.py")))
-    return hashlib.sha256(f"{MODAL_DIGEST} {python}".encode()).hexdigest()
+    return _digest(MODAL_DIGEST, ("beam_runs.py", "beam_packing.py", "modal_map.py",
+                                  "bimorph.py", "rod.py", "materials.py", "contact.py",
+                                  "beam_parameters.py", "models/beam.py"))
 
 
 def _identity(values: np.ndarray):

@@ -31,7 +31,6 @@ os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 from ..models import hertz, tip_mass
 from . import booking, cache, hermite, lanes, monodromy, rk4, scheduler, steady, stop_motion
-from .cache import SOURCE_DIGEST
 from .layouts import (
     BOOKED_METRICS,
     LANE,
@@ -70,7 +69,6 @@ __all__ = [
     "NO_STOP",
     "PARAM",
     "SERIES",
-    "SOURCE_DIGEST",
     "STATE",
     "STATUS",
     "cache_warm",

@@ -5,8 +5,9 @@ engine's entry points inline functions of every file of this package, of the mod
 runs (harvester_sweep.models) and of the compile flags (harvester_sweep.jit): after an edit of
 one of those alone (an editable install), they would run the old code. A digest of the
 whole engine's source is kept beside the cache; when it differs, every cached function of
-the engine is dropped and compiled again. The same digest identifies the engine in a
-sweep's hash, so that a partial result is never resumed by another engine.
+the engine is dropped and compiled again. The orbit solver keeps its own digest the same
+way (engine and solver sources: orbits.SOURCE_DIGEST), which also identifies the solver in
+a tip-mass sweep's hash, so that a partial result is never resumed by another one.
 
 Each engine has its own digest, of the files its machine code is made from: the lane
 engine of the tip-mass model is not recompiled when the beam's modal engine is edited, and
@@ -51,8 +52,9 @@ def _dispatchers(modules):
 
 
 def flush_if_changed(entry, modules, digest=SOURCE_DIGEST) -> None:
-    """Drop the cached machine code of every jitted function of ``modules`` when the
-    engine's source (``digest``) has changed since ``entry`` (a dispatcher) was cached."""
+    """Drop the cached machine code of every jitted function of ``modules`` when their
+    source (``digest``: the engine's by default) has changed since ``entry`` (a
+    dispatcher) was cached."""
     cache = getattr(entry, "_cache", None)
     if cache is None or not hasattr(cache, "cache_path"):
         return
@@ -70,7 +72,7 @@ def flush_if_changed(entry, modules, digest=SOURCE_DIGEST) -> None:
 
 def is_warm(entry) -> bool:
     """Whether ``entry`` (a dispatcher) is in numba's on-disk cache; if not, its first call
-    compiles the engine (1-2 minutes)."""
+    compiles it (the engine, or the orbit solver)."""
     if _FLUSHED:
         return False
     try:

@@ -182,7 +182,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     points finish (n: how many since the last call); the kernel then runs in another
     thread, and stops taking points when ``on_points`` raises (or on KeyboardInterrupt).
     ``settle=False`` runs every point for exactly its budget of periods (PARAM.max_periods),
-    with no steady-state test: one evaluation of the period map (``harvester_sweep.orbits``);
+    with no steady-state test: one evaluation of the period map (period_map.Batch);
     its metrics are those of the periods run (at most MAX_ORBIT_PERIOD).
     """
     n = params.shape[0]
@@ -190,7 +190,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
                   else np.ascontiguousarray(successors, dtype=np.int64))
     heads = _line_heads(successors, n)
     heads = _taking_order(params, heads)
-    threads = _threads(params, len(heads), numba.get_num_threads())
+    threads = call_threads(params, len(heads))
     control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
     args = (params, states, metrics, strobes, successors, heads, control, settle)
     if on_points is None:

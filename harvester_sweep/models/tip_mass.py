@@ -18,7 +18,7 @@ Out of contact the system is linear (:func:`linear_system`), and so is its RK4 s
 (``k``); ``khm`` is 0 for a point out of contact.
 
 What is derived from this declaration: the engine's state rows and their sizes
-(``_engine.layouts``), the orbits' component scales (``period_map.orbit_scales``), the
+(``_engine.layouts``), the orbits' component scales (``period_map.point_scales``), the
 basins' box, the no-contact proof's bound (``acceptance``), the response without the stop
 (``linear``), the solver's first scales (``orbits``) and the step's coupled rate
 (``timescales``). The tests hold it against references written apart from it: the
