@@ -227,11 +227,10 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
 _POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
 
 #: A call whose budget (periods x steps, summed over its points) is below this many RK4
-#: steps runs on one thread: on a quiet machine a second thread saves it little (a call
-#: on two threads takes half its time on one plus a fixed share of about a quarter of
-#: this budget's time: benchmarks/results/period_costs.md), and on a shared machine every
-#: thread of a call waits for the slowest, one that is descheduled most of all (issue 44)
-#: [steps].
+#: steps runs on one thread: on a quiet machine a second thread saves such a call little
+#: (a call on two threads takes half its time on one plus a fixed share:
+#: benchmarks/results/period_costs.md), and on a shared machine every thread of a call
+#: waits for the slowest, one that is descheduled most of all (issue 44) [steps].
 SHORT_CALL = 200_000
 
 
