@@ -103,7 +103,9 @@ class Tally:
         def monodromies(saved):
             def wrapped(packs, states, periods, steps, central=False):
                 copies = 2 * len(states[0]) + 1 if central else len(states[0]) + 1
-                self._book(packs, np.asarray(periods) * copies, self.phase)
+                # (outside Newton and the multipliers: the monodromy of an orbit the whole
+                # transient settled on, counted with Newton's)
+                self._book(packs, np.asarray(periods) * copies, self.phase or "newton")
                 self.inside = True
                 try:
                     return saved(packs, states, periods, steps, central)

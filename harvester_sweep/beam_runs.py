@@ -207,6 +207,7 @@ class _Group:
         tol = np.array([self.points[k]["settle_tolerance"] for k in which])
         scale = np.array([self.scale[k] for k in which])
         live = np.isfinite(jacs).all(axis=(1, 2)) if jac is not None else np.ones(n, bool)
+        last = np.full(n, np.inf)  # each point's last residual, relative to its scales
         for _ in range(rounds):
             idx = np.flatnonzero(live & ~conv)
             if not len(idx):
@@ -220,9 +221,18 @@ class _Group:
                 image, ok = modal_map.map_states(sub_packs, states[idx], periods[idx])
                 J = jacs[idx]
             residual = image - states[idx]
-            small = np.abs(residual / scale[idx]).max(axis=1) <= tol[idx]
+            size = np.abs(residual / scale[idx]).max(axis=1)
+            small = size <= tol[idx]
             conv[idx[small & ok]] = True
             live[idx[~ok]] = False
+            # a chord step that does not halve the residual is given up: its monodromy is
+            # too far from the map's for the iterates to reach the fixed point in the
+            # rounds left
+            if jac is not None:
+                stalled = ~small & (size > 0.5 * last[idx])
+                live[idx[stalled]] = False
+                ok = ok & ~stalled
+            last[idx] = size
             step = idx[~small & ok]
             if len(step):
                 pick = np.isin(idx, step)
@@ -259,6 +269,16 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     if len(lost):
         states[lost] = e[lost]
     m, e, s = g.measure(todo, 0, states)
+    # an orbit the whole transient settled on has no monodromy yet: take it there, at the
+    # orbit's period, for the finer steps' chord steps (without one, each finer step
+    # settles again by a plain run from the coarser orbit, tens to hundreds of periods at
+    # an orbit of period 2 or more), as the tip-mass solver takes one at an orbit its
+    # engine's test found
+    found = [k for k in lost if m[k, HEAD.status] == _SETTLED]
+    if found:
+        J, _, ok = g.jacobians([packs0[k] for k in found], found, e[found],
+                               np.maximum(m[found, HEAD.period], 1).astype(np.int64))
+        jac[np.array(found)[ok]] = J[ok]
     coarse = {k: (point_outputs(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
     periods_run = {k: transient[k] + m[k, HEAD.periods_run] for k in todo}
     # a point that did not settle (or diverged) at the first step is reported as it is,
