@@ -198,8 +198,9 @@ class _Group:
 
     def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON):
         """Fixed points of P^p from ``states`` (len(which), D): full Newton with
-        finite-difference monodromies, or chord steps with ``jac`` where given. Returns
-        (states, monodromies, converged)."""
+        finite-difference monodromies (the last one reused by an iterate within
+        PERTURBATION of where it was taken), or chord steps with ``jac`` where given.
+        Returns (states, monodromies, converged)."""
         states = np.array(states, dtype=float)
         n, D = states.shape
         conv = np.zeros(n, dtype=bool)
@@ -208,18 +209,29 @@ class _Group:
         scale = np.array([self.scale[k] for k in which])
         live = np.isfinite(jacs).all(axis=(1, 2)) if jac is not None else np.ones(n, bool)
         last = np.full(n, np.inf)  # each point's last residual, relative to its scales
+        moved = np.full(n, np.inf)  # each point's last Newton step, relative to its scales
         for _ in range(rounds):
             idx = np.flatnonzero(live & ~conv)
             if not len(idx):
                 break
-            sub_packs = [packs[j] for j in idx]
-            if jac is None:
-                J, image, ok = self.jacobians(sub_packs, [which[j] for j in idx],
-                                              states[idx], periods[idx])
-                jacs[idx] = J
-            else:
-                image, ok = modal_map.map_states(sub_packs, states[idx], periods[idx])
-                J = jacs[idx]
+            # full Newton takes the monodromy again, by copies, unless the iterate moved
+            # less than the copies' own perturbation from where it was taken: it then
+            # changed by less than the forward differences' own error (as the tip-mass
+            # solver's CHORD), and the iterate runs alone
+            fresh = (moved[idx] > PERTURBATION) if jac is None else np.zeros(len(idx), bool)
+            image, ok = np.empty((len(idx), D)), np.empty(len(idx), dtype=bool)
+            for copies, part in ((True, idx[fresh]), (False, idx[~fresh])):
+                if not len(part):
+                    continue
+                where = fresh if copies else ~fresh
+                if copies:
+                    jacs[part], image[where], ok[where] = self.jacobians(
+                        [packs[j] for j in part], [which[j] for j in part], states[part],
+                        periods[part])
+                else:
+                    image[where], ok[where] = modal_map.map_states(
+                        [packs[j] for j in part], states[part], periods[part])
+            J = jacs[idx]
             residual = image - states[idx]
             size = np.abs(residual / scale[idx]).max(axis=1)
             small = size <= tol[idx]
@@ -238,6 +250,7 @@ class _Group:
                 pick = np.isin(idx, step)
                 delta = np.linalg.solve(J[pick] - np.eye(D), -residual[pick][..., None])[..., 0]
                 states[step] += delta
+                moved[step] = np.abs(delta / scale[step]).max(axis=1)
         return states, jacs, conv
 
     def measure(self, which, lv, states):
