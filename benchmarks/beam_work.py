@@ -31,7 +31,7 @@ FREQUENCIES = tuple(np.linspace(110.0, 240.0, 6))  # [Hz]
 PRESETS = ("bimorph_tip", "mak_rod")
 KINDS = {
     "transient": "transient (the first steps)",
-    "newton": "Newton's copies (the first steps)",
+    "newton": "Newton's runs with their copies (the first steps)",
     "measure": "settled again and measured (the first steps)",
     "chord": "chord steps (finer steps)",
     "finer": "settled again and measured (finer steps)",
