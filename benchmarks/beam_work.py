@@ -58,10 +58,14 @@ class Tally:
         self._saved.append((owner, name, saved))
         setattr(owner, name, make(saved))
 
-    def _book(self, packs, periods, kind):
-        steps = np.array([pk.rrow[_FIELDS.steps] for pk in packs])
-        first = np.array([self.first[round(pk.rrow[_FIELDS.omega], 6)] for pk in packs])
-        self.periods[kind] += float(np.sum(np.asarray(periods, dtype=float) * steps / first))
+    def _ratios(self, packs) -> np.ndarray:
+        """Each pack's steps per period over its point's first ones [-]."""
+        return np.array([pk.rrow[_FIELDS.steps] / self.first[round(pk.rrow[_FIELDS.omega], 6)]
+                         for pk in packs])
+
+    def _book(self, packs, periods, kind, ratios=None):
+        ratios = self._ratios(packs) if ratios is None else ratios
+        self.periods[kind] += float(np.sum(np.asarray(periods, dtype=float) * ratios))
 
     def _phase(self, kind):
         def make(saved):
@@ -85,11 +89,9 @@ class Tally:
         def run(saved):
             def wrapped(packs, starts):
                 out = saved(packs, starts)
-                steps = np.array([pk.rrow[_FIELDS.steps] for pk in packs])
-                first = np.array([self.first[round(pk.rrow[_FIELDS.omega], 6)]
-                                  for pk in packs])
-                kind = self.phase or ("transient" if np.all(steps == first) else "finer")
-                self._book(packs, out[0][:, beam_runs.HEAD.periods_run], kind)
+                ratios = self._ratios(packs)
+                kind = self.phase or ("transient" if np.all(ratios == 1.0) else "finer")
+                self._book(packs, out[0][:, beam_runs.HEAD.periods_run], kind, ratios)
                 return out
             return wrapped
 

@@ -220,17 +220,14 @@ class _Group:
             # solver's CHORD), and the iterate runs alone
             fresh = (moved[idx] > PERTURBATION) if jac is None else np.zeros(len(idx), bool)
             image, ok = np.empty((len(idx), D)), np.empty(len(idx), dtype=bool)
-            for copies, part in ((True, idx[fresh]), (False, idx[~fresh])):
-                if not len(part):
-                    continue
-                where = fresh if copies else ~fresh
-                if copies:
-                    jacs[part], image[where], ok[where] = self.jacobians(
-                        [packs[j] for j in part], [which[j] for j in part], states[part],
-                        periods[part])
-                else:
-                    image[where], ok[where] = modal_map.map_states(
-                        [packs[j] for j in part], states[part], periods[part])
+            copied, alone = idx[fresh], idx[~fresh]
+            if len(copied):
+                jacs[copied], image[fresh], ok[fresh] = self.jacobians(
+                    [packs[j] for j in copied], [which[j] for j in copied], states[copied],
+                    periods[copied])
+            if len(alone):
+                image[~fresh], ok[~fresh] = modal_map.map_states(
+                    [packs[j] for j in alone], states[alone], periods[alone])
             J = jacs[idx]
             residual = image - states[idx]
             size = np.abs(residual / scale[idx]).max(axis=1)
