@@ -3,7 +3,8 @@
     python -m benchmarks.beam_work [--output FILE]
 
 The beam's points are solved by their own solver (``beam_runs.solve_beam``): a short
-transient, Newton on the period map with forward-difference monodromies, the orbit settled
+transient, Newton attempts on the period map with forward-difference monodromies (the
+motion integrated on between them, as the tip-mass solver's), the orbit settled
 again and measured by the modal engine, then the same at twice the steps (chord steps with
 the first monodromy) until the change meets the accuracy target, and the Floquet
 multipliers by forward differences at the step reported. This counts the modal engine's
@@ -30,8 +31,8 @@ GAPS = (0.5e-6, 1e-6, 2e-6, 4e-6)  # [m]
 FREQUENCIES = tuple(np.linspace(110.0, 240.0, 6))  # [Hz]
 PRESETS = ("bimorph_tip", "mak_rod")
 KINDS = {
-    "transient": "transient (the first steps)",
-    "newton": "Newton's runs with their copies (the first steps)",
+    "transient": "the motion: transient and pieces between attempts (the first steps)",
+    "newton": "Newton's attempts: runs with their copies (the first steps)",
     "measure": "settled again and measured (the first steps)",
     "chord": "chord steps (finer steps)",
     "finer": "settled again and measured (finer steps)",
@@ -44,7 +45,8 @@ class Tally:
     """While active: the modal engine's work, in periods at each point's first steps, by
     kind (KINDS). The solver's phases (Newton or its chord steps, measuring, the
     multipliers) are wrapped to say what an engine call is for; a call outside them is the
-    transient (at the first steps) or a finer step's run."""
+    motion (at the first steps: the transient, the pieces between attempts) or a finer
+    step's run."""
 
     def __init__(self, first: dict):
         self.periods = collections.Counter()

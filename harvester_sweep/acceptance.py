@@ -124,3 +124,32 @@ def never_reaches(row, high, low, e):
         bound = bound + (stop if row[PARAM.stop_ratio] > 0 else 0.0)
     return high + bound + PROOF_MARGIN * (abs(high) + bound) < row[PARAM.gap] \
         and low - bound - PROOF_MARGIN * (abs(low) + bound) > -row[PARAM.lower_gap]
+
+
+@njit(**SOLVER_JIT)
+def periods_to_near(p, near, distance, radius):
+    """Periods a motion ``distance`` from a stable orbit of period ``p`` and spectral
+    radius ``radius`` needs to come to half ``near`` of it (relative to the scales) [-]:
+    how long to integrate on before the next attempt at that orbit."""
+    return np.ceil(p * np.log(near / (2 * distance))
+                   / np.log(min(max(radius, 1e-3), 1 - 1e-9)))
+
+
+@njit(**SOLVER_JIT)
+def suggested_period(strobes, scale):
+    """The orbit period [forcing periods] suggested by a run's last stroboscopic samples
+    ``strobes`` (n, D), oldest first, in components relative to ``scale`` (D,): the
+    smallest p < n whose repeat |y(nT) - y((n-p)T)| is within 10 times the best of any."""
+    n = strobes.shape[0]
+    gaps = np.empty(n - 1)
+    best = np.inf
+    for k in range(n - 1):
+        gap = norm(strobes[n - 1] - strobes[n - 2 - k], scale)
+        gaps[k] = gap if np.isfinite(gap) else np.inf
+        best = min(best, gaps[k])
+    if not np.isfinite(best):
+        return 1
+    for k in range(n - 1):
+        if gaps[k] <= 10 * best:
+            return k + 1
+    return 1

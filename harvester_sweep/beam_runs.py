@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +20,8 @@ import xarray as xr
 
 from . import modal_map
 from ._engine.modal import HEAD, METRIC_HEAD
+from ._engine.modal.kernel import SAMPLES
+from .acceptance import NEAR, PROOF_MARGIN, on_its_way, periods_to_near, suggested_period
 from .beam_packing import BeamSystem, beam_system, first_steps, pack_beam
 from .beam_parameters import (
     BEAM_PARAMETERS,
@@ -29,6 +32,7 @@ from .beam_parameters import (
     resolve_beam_parameters,
 )
 from .datasets import multiplier_coordinate
+from .orbits import EXPANDING, FIRST_CHUNK, SLICE
 from .outputs import OUTPUTS, STATUS_FLAGS
 from .parameters import ParameterError
 from .period_map import sorted_multipliers
@@ -141,9 +145,10 @@ def solve_beam(points: list, starts=None) -> BeamSolution:
     ((n, D) states at phase 0; None: each point from rest), at the step that meets its
     ``accuracy``. Points of different state sizes are solved in groups.
 
-    The steady state is the motion's attractor: a short transient, then Newton on the
-    period map; an orbit Newton finds unstable (spectral radius above 1) is not the
-    attractor, and the point's whole budget of transient is run instead."""
+    The steady state is the attractor the motion reaches: a short transient, then Newton
+    attempts on the period map from where the motion got to, an orbit taken where it is
+    stable and the motion is on its way to it, the motion integrated on between attempts
+    (_attempts)."""
     n = len(points)
     systems = [system_of(p) for p in points]
     dims = [len(bs.system.matrix) for bs in systems]
@@ -166,6 +171,22 @@ def _padded(rows: list) -> np.ndarray:
     out = np.full((len(rows), max(len(r) for r in rows)), np.nan)
     for i, r in enumerate(rows):
         out[i, :len(r)] = r
+    return out
+
+
+#: Newton's fixed points of ``_Group.newton``: the iterates (n, D), their monodromies (n,
+#: D, D), which converged, the images P^p of the first iterates (n, D), and for an attempt
+#: whether it ended at its first run and the distance it measured there (relative to the
+#: scales) [-].
+Newton = namedtuple("Newton", "states jacobians converged images far distance")
+
+
+def spectral_radii(jacobians) -> np.ndarray:
+    """The spectral radius [-] of each monodromy (n, D, D), inf where one is not finite."""
+    out = np.full(len(jacobians), np.inf)
+    good = np.isfinite(jacobians).all(axis=(1, 2))
+    if good.any():
+        out[good] = np.abs(np.linalg.eigvals(jacobians[good])).max(axis=1)
     return out
 
 
@@ -196,11 +217,17 @@ class _Group:
         steps = np.array([PERTURBATION * self.scale[k] for k in which])
         return modal_map.monodromies(packs, states, periods, steps)
 
-    def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON):
+    def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON,
+               touched=None, retry=None) -> Newton:
         """Fixed points of P^p from ``states`` (len(which), D): full Newton with
         finite-difference monodromies (the last one reused by an iterate within
         PERTURBATION of where it was taken), or chord steps with ``jac`` where given.
-        Returns (states, monodromies, converged)."""
+        Attempts from the motion's states (``touched``: whether each motion touches a
+        stop) end at their first run where a motion that touches is not in a stable
+        orbit's linear regime: Newton's first step beyond NEAR, or the monodromy there
+        expanding (EXPANDING; not in a ``retry`` at the period of the orbit the last
+        attempt turned away, which the motion nears along a multiplier near -1), as the
+        tip-mass solver's attempts."""
         states = np.array(states, dtype=float)
         n, D = states.shape
         conv = np.zeros(n, dtype=bool)
@@ -210,7 +237,10 @@ class _Group:
         live = np.isfinite(jacs).all(axis=(1, 2)) if jac is not None else np.ones(n, bool)
         last = np.full(n, np.inf)  # each point's last residual, relative to its scales
         moved = np.full(n, np.inf)  # each point's last Newton step, relative to its scales
-        for _ in range(rounds):
+        images = np.full((n, D), np.nan)
+        far = np.zeros(n, dtype=bool)
+        distance = np.full(n, np.inf)
+        for iteration in range(rounds):
             idx = np.flatnonzero(live & ~conv)
             if not len(idx):
                 break
@@ -228,6 +258,8 @@ class _Group:
             if len(alone):
                 image[~fresh], ok[~fresh] = modal_map.map_states(
                     [packs[j] for j in alone], states[alone], periods[alone])
+            if iteration == 0:
+                images[idx] = image
             J = jacs[idx]
             residual = image - states[idx]
             size = np.abs(residual / scale[idx]).max(axis=1)
@@ -246,9 +278,17 @@ class _Group:
             if len(step):
                 pick = np.isin(idx, step)
                 delta = np.linalg.solve(J[pick] - np.eye(D), -residual[pick][..., None])[..., 0]
-                states[step] += delta
                 moved[step] = np.abs(delta / scale[step]).max(axis=1)
-        return states, jacs, conv
+                if touched is not None and iteration == 0:
+                    # (the distance from the orbit: about the first step, and at least
+                    # half the motion's move over the run)
+                    distance[step] = np.maximum(moved[step], 0.5 * size[pick])
+                    expands = (spectral_radii(J[pick]) > EXPANDING) & ~retry[step]
+                    far[step] = touched[step] & ((distance[step] > NEAR) | expands)
+                    live[step[far[step]]] = False
+                    delta[far[step]] = 0.0
+                states[step] += delta
+        return Newton(states, jacs, conv, images, far, distance)
 
     def measure(self, which, lv, states):
         """The orbits from their fixed points: settled again by the engine's own test (a
@@ -260,37 +300,40 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     g = _Group(points, systems, [None] * len(points) if starts is None else starts)
     n = len(points)
     todo = list(range(n))
-    # level 0: a short transient, then Newton on the period map of the orbit's period
+    # level 0: a short transient, then attempts from where the motion got to (_attempts)
     short = [min(TRANSIENT, p["max_periods"]) for p in points]
-    m, e, _ = modal_map.run(g.packs(todo, 0, budget=short), g.starts)
-    transient = m[:, HEAD.periods_run]
-    period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1), 1)
-    period = period.astype(np.int64)
+    m, e, s = modal_map.run(g.packs(todo, 0, budget=short), g.starts)
     packs0 = g.packs(todo, 0)
-    orbit, jac, conv = g.newton(packs0, todo, e, period)
-    # where Newton did not converge, or found an orbit the motion leaves (unstable): the
-    # whole budget of transient, from where it stopped
-    rho = np.array([np.abs(np.linalg.eigvals(J)).max() if np.isfinite(J).all() else np.inf
-                    for J in jac])
-    conv &= rho <= UNSTABLE
-    jac[~conv] = np.nan
-    lost = np.flatnonzero(~conv)
-    states = orbit.copy()
-    if len(lost):
-        states[lost] = e[lost]
-    m, e, s = g.measure(todo, 0, states)
-    # an orbit the whole transient settled on has no monodromy yet: take it there, at the
+    run = m[:, HEAD.periods_run].copy()
+    period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1), 1)
+    ended = {k: (m[k], e[k], s[k]) for k in todo if m[k, HEAD.status] == _DIVERGED}
+    D = e.shape[1]
+    orbit, jac = np.full((n, D), np.nan), np.full((n, D, D), np.nan)
+    period = period.astype(np.int64)
+    _attempts(g, packs0, [k for k in todo if k not in ended], e, s, run, period,
+              np.array([_touched(row) for row in m]), orbit, jac, ended)
+    taken = [k for k in todo if k not in ended]
+    m, e, s = np.empty_like(m), np.empty_like(e), np.empty_like(s)
+    if taken:
+        m[taken], e[taken], s[taken] = g.measure(taken, 0, orbit[taken])
+        run[taken] += m[taken, HEAD.periods_run]
+    for k, (row, end, strobe) in ended.items():
+        m[k], e[k], s[k] = row, end, strobe
+    # an orbit the motion settled on by the engine's own test has no monodromy yet, and
+    # one Newton took at a multiple of its period (a fixed point of P^p that repeats
+    # sooner, as the measure found) has that of the longer map: take it there, at the
     # orbit's period, for the finer steps' chord steps (without one, each finer step
     # settles again by a plain run from the coarser orbit, tens to hundreds of periods at
     # an orbit of period 2 or more), as the tip-mass solver takes one at an orbit its
     # engine's test found
-    found = [k for k in lost if m[k, HEAD.status] == _SETTLED]
+    found = [k for k in todo if m[k, HEAD.status] == _SETTLED
+             and (k in ended or m[k, HEAD.period] != period[k])]
     if found:
         J, _, ok = g.jacobians([packs0[k] for k in found], found, e[found],
                                np.maximum(m[found, HEAD.period], 1).astype(np.int64))
         jac[np.array(found)[ok]] = J[ok]
     coarse = {k: (point_outputs(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
-    periods_run = {k: transient[k] + m[k, HEAD.periods_run] for k in todo}
+    periods_run = {k: run[k] for k in todo}
     # a point that did not settle (or diverged) at the first step is reported as it is,
     # with no estimate: a finer step would only run its whole budget again
     done = {k: (coarse[k], math.nan) for k in todo if m[k, HEAD.status] != _SETTLED}
@@ -302,8 +345,8 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         per = np.array([max(int(coarse[k][0][0]["orbit_period"]), 1) for k in todo],
                        dtype=np.int64)
         # (the first level's monodromies serve the chord steps of every level)
-        orbit, _, conv_l = g.newton(packs, todo, start, per, jac=jac[todo], rounds=CHORD)
-        states = np.where(conv_l[:, None], orbit, start)
+        nt = g.newton(packs, todo, start, per, jac=jac[todo], rounds=CHORD)
+        states = np.where(nt.converged[:, None], nt.states, start)
         m, e, s = modal_map.run(packs, states)
         nxt = []
         for j, k in enumerate(todo):
@@ -330,6 +373,109 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         values["spectral_radius"][i] = abs(mult[k][0]) if k in mult else np.nan
         modal[i], ends[i], strobes[i] = amp, end, strobe
         multipliers[i] = mult.get(k, np.full(len(end), np.nan))
+
+
+def _touched(row) -> bool:
+    """Whether a run of metric row ``row`` touched a stop: a contact force, or an impact."""
+    return bool(row[HEAD.contact_force] > 0 or row[HEAD.impacts] > 0)
+
+
+def _on_its_way(g, pack, k, t0, t1, y, jac) -> bool:
+    """Whether point k's motion at ``t0``, one map of the period map later at ``t1``, is
+    on its way to the stable fixed point ``y`` of monodromy ``jac`` (pack: the point at
+    the first steps), as the tip-mass solver judges it: an orbit clear of the stops where
+    it is proved that the motion never reaches one either (ModalPoint.reach: the
+    contact-free motion's excursion is bounded, and that orbit is the motion's only
+    one clear of them); an orbit with contact where the motion is in its linear regime
+    (acceptance.on_its_way)."""
+    gaps = pack.gaps
+    if (pack.reach(y) < gaps).all():  # (an orbit clear of the stops)
+        reach = pack.reach(t0)
+        return bool((reach + PROOF_MARGIN * np.abs(reach) < gaps).all())
+    return on_its_way(t0, t1, 1, y, jac, g.scale[k], g.points[k]["settle_tolerance"], NEAR)
+
+
+def _attempts(g, packs, trying, e, s, run, period, touched, orbit, jac, ended) -> None:
+    """Newton attempts at the first steps for the points ``trying``, from the motion's
+    states ``e`` (n, D) after ``run`` (n,) periods, with strobes ``s``, at the orbit
+    periods ``period`` (n,), whether the motion ``touched`` (n,) a stop in its last run,
+    as the tip-mass solver makes them (orbits, "Newton only accelerates"): a stable
+    orbit the motion is on its way to (_on_its_way) is taken (its state into
+    ``orbit``, its monodromy into ``jac``); else the motion, moved on by the attempt's
+    first run, is integrated on (as long as it has run, at least FIRST_CHUNK periods, or
+    for the periods the attempt's monodromy says it needs to come NEAR the orbit) and
+    tried again at the period its strobes suggest. A motion that settles by the engine's
+    own test, diverges or spends its budget ends (``ended``: point -> its last run's
+    metric row, end state and strobes). ``e``, ``s`` and ``run`` are updated in place.
+
+    Newton converges as readily to a stable orbit of another attractor, which coexists
+    with the motion's own near a period doubling or a fold, as to the motion's own: it
+    only accelerates the motion to an orbit it is seen to reach."""
+    refused = {}  # point -> period of the stable orbit with contact last turned away
+    left = {}  # point -> periods of its piece of motion still to run
+    while trying or left:
+        if trying:
+            _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, left)
+        # (a piece runs in slices of at most SLICE periods, so that no call waits long
+        # for one point, as the tip-mass solver's; none shorter than the strobes the
+        # engine's settle test looks at, unless the whole piece is)
+        moving = list(left)
+        if not moving:
+            return
+        budget = [int(left[k] if left[k] < SLICE + SAMPLES else SLICE) for k in moving]
+        m, end, strobes = modal_map.run(g.packs(moving, 0, budget=budget), e[moving])
+        trying = []
+        for j, k in enumerate(moving):
+            e[k], s[k], touched[k] = end[j], strobes[j], _touched(m[j])
+            run[k] += m[j, HEAD.periods_run]
+            left[k] -= m[j, HEAD.periods_run]
+            if m[j, HEAD.status] != _NOT_SETTLED or run[k] >= g.points[k]["max_periods"]:
+                ended[k] = (m[j], end[j], strobes[j])
+                del left[k]
+            elif left[k] <= 0:
+                del left[k]
+                # (a motion nearing a stable orbit along a multiplier near -1 repeats
+                # after twice its period better than after it: where the strobes suggest
+                # twice the period of the orbit last turned away, the period is that
+                # orbit's, as in the tip-mass solver)
+                period[k] = suggested_period(strobes[j], g.scale[k])
+                if refused[k] > 0 and period[k] == 2 * refused[k]:
+                    period[k] = refused[k]
+                trying.append(k)
+
+
+def _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, left) -> None:
+    """One Newton attempt of each point of ``trying`` (_attempts): a stable orbit the
+    motion is on its way to is taken; else the motion moves on by the attempt's first run
+    and its next piece (``left``: periods) is set, as long as it has run (at least
+    FIRST_CHUNK periods), or the periods the attempt's monodromy says it needs to come
+    NEAR the orbit, within its budget."""
+    retry = np.array([period[k] == refused.get(k, 0) for k in trying])
+    nt = g.newton([packs[k] for k in trying], trying, e[trying], period[trying],
+                  touched=touched[trying], retry=retry)
+    radius = spectral_radii(nt.jacobians)
+    for j, k in enumerate(trying):
+        p = period[k]
+        if nt.converged[j] and radius[j] <= UNSTABLE and _on_its_way(
+                g, packs[k], k, e[k], nt.images[j], nt.states[j], nt.jacobians[j]):
+            orbit[k], jac[k] = nt.states[j], nt.jacobians[j]
+            continue
+        d0 = nt.distance[j] if nt.far[j] else np.abs((e[k] - nt.states[j]) / g.scale[k]).max()
+        stable = radius[j] < 1 and (nt.far[j] or nt.converged[j])
+        hint = periods_to_near(p, NEAR, d0, radius[j]) if stable and d0 > NEAR else 0.0
+        refused[k] = p if stable and nt.converged[j] and touched[k] else 0
+        if np.isfinite(nt.images[j]).all():  # (the attempt's first run is the motion's)
+            e[k] = nt.images[j]
+            run[k] += p
+        chunk = max(run[k], FIRST_CHUNK)
+        if hint > 0:
+            chunk = min(max(hint, p), 4 * chunk)
+        # (a piece that ends short of the budget leaves room for an attempt and a last
+        # run as long as the strobes it reports; at least one period, which the run
+        # measures, where the attempt's own run spent the budget)
+        rest = g.points[k]["max_periods"] - run[k]
+        whole = chunk >= rest or rest <= 2 * SAMPLES
+        left[k] = max(rest, 1) if whole else min(chunk, rest - 2 * SAMPLES)
 
 
 def _multipliers(g: _Group, done: dict) -> dict:

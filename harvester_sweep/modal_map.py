@@ -54,6 +54,26 @@ class ModalPoint:
         """The state y (D,) at phase 0 of eigen-coordinates z (D,)."""
         return (self.basis @ z).real + self.particular.imag
 
+    def reach(self, y) -> np.ndarray:
+        """How far [m] (S,) towards each surface, against its gap (``gaps``), the motion
+        from state y (D,) at phase 0 can come at any later time were it clear of the
+        surfaces: its particular solution's amplitude there, |pen_p|, plus sum_d |pen_sd|
+        |z_d| of its eigen-coordinates z, none of which grows (every eigenvalue has
+        Re <= 0; else +inf)."""
+        D, S, _ = self.dims
+        lam, _, pen, _, pen_p, *_ = complex_fields(D, S, 0)
+        if (self.crow[lam:lam + D].real > 0).any():
+            return np.full(S, np.inf)
+        return (np.abs(self.crow[pen:pen + S * D]).reshape(S, D) @ np.abs(self.to_modal(y))
+                + np.abs(self.crow[pen_p:pen_p + S]))
+
+    @property
+    def gaps(self) -> np.ndarray:
+        """Each surface's gap [m] (S,)."""
+        D, S, _ = self.dims
+        gap = real_fields(D, S, 0)[8]
+        return self.rrow[gap:gap + S]
+
 
 def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resistance, steps,
          substep, max_periods, settle, limit, scale) -> ModalPoint:

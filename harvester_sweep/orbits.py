@@ -71,8 +71,10 @@ from .acceptance import (
     never_reaches,
     norm,
     on_its_way,
+    periods_to_near,
     reach,
     reaches_a_stop,
+    suggested_period,
 )
 from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
 from .jit import SOLVER_JIT
@@ -590,14 +592,6 @@ def _touched(row, m):
         or (row[PARAM.lower_khm] > 0 and m[METRIC.impacts_per_period_lower] > 0)
 
 
-@njit(**SOLVER_JIT)
-def _periods_to_near(p, near, distance, radius):
-    """Periods a motion ``distance`` from a stable orbit of period ``p`` and spectral
-    radius ``radius`` needs to come to half ``near`` of it."""
-    return np.ceil(p * np.log(near / (2 * distance))
-                   / np.log(min(max(radius, 1e-3), 1 - 1e-9)))
-
-
 # -- set-up of a point -------------------------------------------------------------------
 
 @njit(**SOLVER_JIT)
@@ -726,7 +720,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
             distance = d0
             far = True
     if far:
-        need = _periods_to_near(T.counts[i, _COUNT.p], NEAR, distance, radius)
+        need = periods_to_near(T.counts[i, _COUNT.p], NEAR, distance, radius)
         T.reals[i, _REAL.hint] = need if radius < 1 else 0.0
     stalled = not converged and not diverged and (
         not good or T.counts[i, _COUNT.iteration] + 1 >= MAX_NEWTON
@@ -897,7 +891,7 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
         return _DONE
     # not taken: integrate on for about the periods the motion needs to come near
     d0 = norm(e, scale)
-    T.reals[i, _REAL.hint] = _periods_to_near(p, near, d0, radius) if stable and d0 > near else 0.0
+    T.reals[i, _REAL.hint] = periods_to_near(p, near, d0, radius) if stable and d0 > near else 0.0
     T.counts[i, _COUNT.refused] = p if stable and not free else 0
     return _give_up(T, i)
 
@@ -986,7 +980,7 @@ def _transient(T, i, m, f, strobes):
     # period better than after it, and Newton on that map, whose multiplier is then near
     # +1, stalls: where the samples suggest twice the period of the orbit with contact it
     # was last turned away from, the period is that orbit's)
-    suggested = _orbit_period(strobes, T.components[i, _COMPONENTS.scale])
+    suggested = suggested_period(strobes, T.components[i, _COMPONENTS.scale])
     refused = T.counts[i, _COUNT.refused]
     if refused > 0 and suggested == 2 * refused:
         suggested = refused
@@ -995,24 +989,6 @@ def _transient(T, i, m, f, strobes):
     T.counts[i, _COUNT.p] = int(m[METRIC.orbit_period]) if settled else suggested
     _attempt(T, i)
     return _NEWTON
-
-
-@njit(**SOLVER_JIT)
-def _orbit_period(strobes, scale):
-    """The orbit period suggested by a run's stroboscopic samples (SAMPLES, D): the
-    smallest p whose repeat |y(nT) - y((n-p)T)| is within 10 times the best of any p."""
-    gaps = np.empty(MAX_ORBIT_PERIOD)
-    best = np.inf
-    for k in range(MAX_ORBIT_PERIOD):
-        gap = norm(strobes[SAMPLES - 1] - strobes[SAMPLES - 2 - k], scale)
-        gaps[k] = gap if np.isfinite(gap) else np.inf
-        best = min(best, gaps[k])
-    if not np.isfinite(best):
-        return 1
-    for k in range(MAX_ORBIT_PERIOD):
-        if gaps[k] <= 10 * best:
-            return k + 1
-    return 1
 
 
 # -- error estimate and accuracy -------------------------------------------------------------

@@ -178,6 +178,26 @@ def test_the_orbit_with_contact_is_an_orbit_of_the_equations(preset, overrides):
     assert power == pytest.approx(v["power"][0], rel=1e-5)
 
 
+def test_the_steady_state_is_the_one_the_motion_from_rest_reaches():
+    """Near a period doubling a stable period-1 orbit coexists with the period-2 orbit
+    that the motion from rest settles on; Newton from the short transient converged to the
+    period-1 one, and it was reported. SciPy on the same modal equations, from rest, comes
+    to the orbit reported, and its strobes alternate: period 2."""
+    p, sol = _solve(gap=2.5e-7, frequency=160.0, n_modes=2)
+    bs = system_of(p)
+    assert sol.values["status"][0] == 0
+    y = np.zeros(len(bs.system.matrix))
+    for _ in range(40):
+        y, _ = _reference_period(p, bs, y, 1, rtol=1e-10)
+    after, _ = _reference_period(p, bs, y, 1, rtol=1e-10)
+    period = int(sol.values["orbit_period"][0])
+    orbit = sol.strobes[0][-period:]  # (each of its phases)
+    distance = np.abs((orbit - y) / bs.scale).max(axis=1).min()
+    assert distance <= 1e-5
+    assert np.abs((after - y) / bs.scale).max() > 1e-2
+    assert period == 2
+
+
 def test_a_graze_found_again_at_its_separation_does_not_stop_time():
     """A point of the rod's 64 x 64 grid where a Newton copy only grazes the rod: its
     separation's root lay at the touch itself, the flow from there met the touch again at
