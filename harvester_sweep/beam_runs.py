@@ -32,7 +32,7 @@ from .beam_parameters import (
     resolve_beam_parameters,
 )
 from .datasets import multiplier_coordinate
-from .orbits import EXPANDING, FIRST_CHUNK, SLICE
+from .orbits import EXPANDING, FIRST_CHUNK
 from .outputs import OUTPUTS, STATUS_FLAGS
 from .parameters import ParameterError
 from .period_map import sorted_multipliers
@@ -416,13 +416,10 @@ def _attempts(g, packs, trying, e, s, run, period, touched, orbit, jac, ended) -
     while trying or left:
         if trying:
             _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, left)
-        # (a piece runs in slices of at most SLICE periods, so that no call waits long
-        # for one point, as the tip-mass solver's; none shorter than the strobes the
-        # engine's settle test looks at, unless the whole piece is)
         moving = list(left)
         if not moving:
             return
-        budget = [int(left[k] if left[k] < SLICE + SAMPLES else SLICE) for k in moving]
+        budget = [int(left[k]) for k in moving]
         m, end, strobes = modal_map.run(g.packs(moving, 0, budget=budget), e[moving])
         trying = []
         for j, k in enumerate(moving):
