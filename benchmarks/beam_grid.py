@@ -4,7 +4,7 @@ points did, for the rigid stop and the rod.
     python -m benchmarks.beam_grid [--stops rigid,rod] [--output benchmarks/results/beam_grid.md]
 
 The grid is benchmarks/cases.py's (gap 0.25-4 um, 100-250 Hz, 64 x 64), every point from
-its linear steady state, at the presets' own budget of periods and accuracy, run as a user
+rest, at the presets' own budget of periods and accuracy, run as a user
 runs it: a sweep file of ``model = "beam"`` through ``beam_cluster.run_beam_file`` in this
 process (chunks of points, each solved in one parallel call, each saved as it finishes).
 One run per stop, after one point that loads (or compiles) the engine. 'CPU / wall': the

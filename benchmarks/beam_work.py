@@ -154,7 +154,7 @@ def main(argv=None) -> None:
              "Each preset at its own budget and accuracy on gaps "
              f"{', '.join(f'{g:g}' for g in GAPS)} m x {len(FREQUENCIES)} frequencies "
              f"{FREQUENCIES[0]:g}-{FREQUENCIES[-1]:g} Hz, every "
-             "point from its linear steady state. Forcing periods per point at its first steps "
+             "point from rest. Forcing periods per point at its first steps "
              "per period (a run at twice the steps counts twice), by kind.", "",
              "| preset | points (settled) | " + " | ".join(KINDS.values())
              + " | all | wall [ms / point] | periods_run of the points not settled |",

@@ -514,7 +514,7 @@ def beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=
     units), solved in this process and kept in memory. With ``directions`` ("up", "down"
     or both) and a ``frequency`` axis, each line along frequency is swept in that
     direction, every point starting from the previous one's orbit (the stop's
-    hysteresis); otherwise every point starts from its linear steady state.
+    hysteresis); otherwise every point starts from rest.
     ``progress(done, total, what)``, if given, is called after each step of the lines (or
     once for an unswept grid). Returns a CF dataset (``model`` = "beam").
 

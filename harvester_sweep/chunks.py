@@ -9,7 +9,7 @@ chunking, the thread count or the machine that ran its chunk.
 
 A chunk of a beam sweep (``spec.model == "beam"``) is solved by the beam's own solver
 (:func:`beam_chunk`): its lines swept along frequency together, one step after another
-(``beam_runs._swept``), or its points each from its linear steady state.
+(``beam_runs._swept``), or its points each from rest.
 """
 
 from __future__ import annotations
@@ -104,7 +104,7 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
 def beam_chunk(spec, chunk: int, progress=None) -> dict:
     """Solve chunk ``chunk`` of a beam sweep ``spec``: each line swept along frequency in its
     direction, every point starting from the previous one's orbit, or each point (a line of
-    one) from its linear steady state.
+    one) from rest.
 
     ``progress(done, total, what)``, if given, is told after each frequency step of the
     chunk's lines (``total`` steps), or once for points. Returns each output of
