@@ -305,11 +305,11 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     m, e, s = modal_map.run(g.packs(todo, 0, budget=short), g.starts)
     packs0 = g.packs(todo, 0)
     run = m[:, HEAD.periods_run].copy()
-    period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1), 1)
+    period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1),
+                      1).astype(np.int64)
     ended = {k: (m[k], e[k], s[k]) for k in todo if m[k, HEAD.status] == _DIVERGED}
     D = e.shape[1]
     orbit, jac = np.full((n, D), np.nan), np.full((n, D, D), np.nan)
-    period = period.astype(np.int64)
     _attempts(g, packs0, [k for k in todo if k not in ended], e, s, run, period,
               np.array([_touched(row) for row in m]), orbit, jac, ended)
     taken = [k for k in todo if k not in ended]
@@ -331,7 +331,7 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     if found:
         J, _, ok = g.jacobians([packs0[k] for k in found], found, e[found],
                                np.maximum(m[found, HEAD.period], 1).astype(np.int64))
-        jac[np.array(found)[ok]] = J[ok]
+        jac[found] = np.where(ok[:, None, None], J, np.nan)
     coarse = {k: (point_outputs(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
     periods_run = {k: run[k] for k in todo}
     # a point that did not settle (or diverged) at the first step is reported as it is,
