@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from . import modal_map
-from ._engine.modal import HEAD, METRIC_HEAD
+from ._engine.modal import HEAD, METRIC_HEAD, metric_size
 from ._engine.modal.kernel import SAMPLES
 from .acceptance import NEAR, PROOF_MARGIN, on_its_way, periods_to_near, suggested_period
 from .beam_packing import BeamSystem, beam_system, first_steps, pack_beam
@@ -300,17 +300,29 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     g = _Group(points, systems, [None] * len(points) if starts is None else starts)
     n = len(points)
     todo = list(range(n))
-    # level 0: a short transient, then attempts from where the motion got to (_attempts)
-    short = [min(TRANSIENT, p["max_periods"]) for p in points]
-    m, e, s = modal_map.run(g.packs(todo, 0, budget=short), g.starts)
+    # level 0: a short transient, then attempts from where the motion got to (_attempts);
+    # a motion proved never to reach a stop from its start settles on the linear steady
+    # state, without either (_take_free)
     packs0 = g.packs(todo, 0)
-    run = m[:, HEAD.periods_run].copy()
-    period = np.where(m[:, HEAD.status] == _SETTLED, np.maximum(m[:, HEAD.period], 1),
-                      1).astype(np.int64)
-    ended = {k: (m[k], e[k], s[k]) for k in todo if m[k, HEAD.status] == _DIVERGED}
-    D = e.shape[1]
+    D = len(g.starts[0])
+    e = np.array(g.starts, dtype=float)
+    s = np.full((n, SAMPLES, D), np.nan)
+    m = np.full((n, metric_size(len(systems[0].system.outputs))), np.nan)
+    run, period = np.zeros(n), np.ones(n, dtype=np.int64)
     orbit, jac = np.full((n, D), np.nan), np.full((n, D, D), np.nan)
-    _attempts(g, packs0, [k for k in todo if k not in ended], e, s, run, period,
+    free = [k for k in todo if _never_reaches(packs0[k], e[k])]
+    for k in free:
+        _take_free(packs0[k], k, orbit, jac, period)
+    moving = [k for k in todo if k not in free]
+    if moving:
+        short = [min(TRANSIENT, points[k]["max_periods"]) for k in moving]
+        m[moving], e[moving], s[moving] = modal_map.run(g.packs(moving, 0, budget=short),
+                                                        e[moving])
+        run[moving] = m[moving, HEAD.periods_run]
+        tested = m[moving, HEAD.status] == _SETTLED
+        period[moving] = np.where(tested, np.maximum(m[moving, HEAD.period], 1), 1)
+    ended = {k: (m[k], e[k], s[k]) for k in moving if m[k, HEAD.status] == _DIVERGED}
+    _attempts(g, packs0, [k for k in moving if k not in ended], e, s, run, period,
               np.array([_touched(row) for row in m]), orbit, jac, ended)
     taken = [k for k in todo if k not in ended]
     m, e, s = np.empty_like(m), np.empty_like(e), np.empty_like(s)
@@ -380,6 +392,20 @@ def _touched(row) -> bool:
     return bool(row[HEAD.contact_force] > 0 or row[HEAD.impacts] > 0)
 
 
+def _never_reaches(pack, y) -> bool:
+    """Whether the motion from state y (D,) at phase 0 of ``pack`` provably never reaches
+    a stop (ModalPoint.reach, with PROOF_MARGIN of its bound for rounding)."""
+    reach = pack.reach(y)
+    return bool((reach + PROOF_MARGIN * np.abs(reach) < pack.gaps).all())
+
+
+def _take_free(pack, k, orbit, jac, period) -> None:
+    """Point k, whose motion never reaches a stop, settles on the linear steady state, the
+    particular solution (the fixed point of its exact contact-free flow, of period 1): its
+    state at phase 0 into ``orbit``, its monodromy in closed form into ``jac``."""
+    orbit[k], jac[k], period[k] = pack.particular.imag, pack.free_monodromy(1), 1
+
+
 def _on_its_way(g, pack, k, t0, t1, y, jac) -> bool:
     """Whether point k's motion at ``t0``, one map of the period map later at ``t1``, is
     on its way to the stable fixed point ``y`` of monodromy ``jac`` (pack: the point at
@@ -388,10 +414,8 @@ def _on_its_way(g, pack, k, t0, t1, y, jac) -> bool:
     contact-free motion's excursion is bounded, and that orbit is the motion's only
     one clear of them); an orbit with contact where the motion is in its linear regime
     (acceptance.on_its_way)."""
-    gaps = pack.gaps
-    if (pack.reach(y) < gaps).all():  # (an orbit clear of the stops)
-        reach = pack.reach(t0)
-        return bool((reach + PROOF_MARGIN * np.abs(reach) < gaps).all())
+    if (pack.reach(y) < pack.gaps).all():  # (an orbit clear of the stops)
+        return _never_reaches(pack, t0)
     return on_its_way(t0, t1, 1, y, jac, g.scale[k], g.points[k]["settle_tolerance"], NEAR)
 
 
@@ -447,6 +471,12 @@ def _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, lef
     and its next piece (``left``: periods) is set, as long as it has run (at least
     FIRST_CHUNK periods), or the periods the attempt's monodromy says it needs to come
     NEAR the orbit, within its budget."""
+    proved = [k for k in trying if _never_reaches(packs[k], e[k])]
+    for k in proved:
+        _take_free(packs[k], k, orbit, jac, period)
+    trying = [k for k in trying if k not in proved]
+    if not trying:
+        return
     retry = np.array([period[k] == refused.get(k, 0) for k in trying])
     nt = g.newton([packs[k] for k in trying], trying, e[trying], period[trying],
                   touched=touched[trying], retry=retry)
@@ -478,20 +508,31 @@ def _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, lef
 def _multipliers(g: _Group, done: dict) -> dict:
     """The Floquet multipliers (largest modulus first) of each settled point of ``done``
     (point -> ((outputs, end state, strobes, level), estimate)): the monodromy of its
-    orbit by forward differences at the level reported. Newton's monodromy at the first
+    orbit by forward differences at the level reported, or the contact-free map's in
+    closed form where the orbit provably never reaches a stop. Newton's monodromy at the first
     level is off by that level's discretization error (1e-5 to 1e-4 in the multipliers on
     the presets), the forward differences' own error is 1e-6 or less."""
     settled = [k for k, ((out, *_), _) in done.items() if out[0]["status"] == _SETTLED]
     found = {}
     for lv in sorted({done[k][0][3] for k in settled}):
         which = [k for k in settled if done[k][0][3] == lv]
+        packs = g.packs(which, lv)
         periods = np.array([max(int(done[k][0][0][0]["orbit_period"]), 1) for k in which])
+        ends = np.array([done[k][0][1] for k in which])
+        # (an orbit the motion from it provably never leaves for a stop has the
+        # contact-free map's monodromy, in closed form)
+        free = np.array([_never_reaches(pk, y) for pk, y in zip(packs, ends)], dtype=bool)
+        for j in np.flatnonzero(free):
+            found[which[j]] = sorted_multipliers(packs[j].free_monodromy(periods[j])[None])[0]
+        copied = np.flatnonzero(~free)
+        if not len(copied):
+            continue
         jac, _, ok = modal_map.monodromies(
-            g.packs(which, lv), np.array([done[k][0][1] for k in which]), periods,
-            np.array([PERTURBATION * g.scale[k] for k in which]))
-        for j, k in enumerate(which):
-            if ok[j]:
-                found[k] = sorted_multipliers(jac[j][None])[0]
+            [packs[j] for j in copied], ends[copied], periods[copied],
+            np.array([PERTURBATION * g.scale[which[j]] for j in copied]))
+        for i, j in enumerate(copied):
+            if ok[i]:
+                found[which[j]] = sorted_multipliers(jac[i][None])[0]
     return found
 
 

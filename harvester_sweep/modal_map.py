@@ -67,11 +67,20 @@ class ModalPoint:
         return (np.abs(self.crow[pen:pen + S * D]).reshape(S, D) @ np.abs(self.to_modal(y))
                 + np.abs(self.crow[pen_p:pen_p + S]))
 
+    def free_monodromy(self, periods: int) -> np.ndarray:
+        """The monodromy (D, D) of ``periods`` forcing periods of the motion clear of the
+        surfaces, in closed form: the engine's flow there is exact, exp(lambda t) in the
+        eigen-coordinates, so the map is W exp(Lambda p T) W^-1."""
+        D, S, _ = self.dims
+        lam = complex_fields(D, S, 0)[0]
+        span = periods * 2.0 * np.pi / self.rrow[RealFields(*real_fields(D, S, 0)).omega]
+        return ((self.basis * np.exp(self.crow[lam:lam + D] * span)) @ self.inverse).real
+
     @property
     def gaps(self) -> np.ndarray:
         """Each surface's gap [m] (S,)."""
         D, S, _ = self.dims
-        gap = real_fields(D, S, 0)[8]
+        gap = RealFields(*real_fields(D, S, 0)).gap
         return self.rrow[gap:gap + S]
 
 

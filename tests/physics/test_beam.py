@@ -8,11 +8,13 @@ import math
 
 import numpy as np
 import pytest
+import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from harvester_sweep import bimorph as bm
 from harvester_sweep import rod as rd
 from harvester_sweep import run_scene
+from harvester_sweep.beam_packing import first_steps, pack_beam
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
 from harvester_sweep.beam_runs import solve_beam, system_of
 from harvester_sweep.models import beam as beam_model
@@ -42,6 +44,33 @@ def test_without_contact_the_beam_is_its_modal_phasor_sum(n_modes, position, rat
     assert v["x_min"][0] == pytest.approx(-abs(W), rel=1e-9)
     assert v["v_peak"][0] == pytest.approx(abs(V), rel=1e-9)
     assert v["power"][0] == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]), rel=1e-9)
+
+
+def test_the_contact_free_map_and_its_reach_are_the_linear_systems():
+    """Clear of the stop: the monodromy in closed form is SciPy's expm of the linear
+    system over the periods; the reach that proves a motion never comes to the stop bounds
+    the surface's motion that SciPy integrates from a state off the orbit, and on the
+    orbit it is the orbit's own amplitude there."""
+    p = resolve_beam_parameters(n_modes=3, frequency=150.0, gap=1e-2)
+    bs = system_of(p)
+    pack = pack_beam(p, bs, *first_steps(p, bs))
+    M, T = bs.system.matrix, 1.0 / p["frequency"]
+    expm = scipy.linalg.expm(M * 2 * T)
+    assert np.abs(pack.free_monodromy(2) - expm).max() <= 1e-9 * np.abs(expm).max()
+    orbit = pack.particular.imag
+    rng = np.random.default_rng(3)
+    y0 = orbit + 3.0 * bs.scale * rng.standard_normal(len(orbit))
+    w, A, C = 2 * math.pi * p["frequency"], p["amplitude"], bs.system.surfaces[0]
+
+    def motion(y, periods):
+        res = solve_ivp(lambda t, y: M @ y + bs.system.forcing * A * math.sin(w * t),
+                        (0.0, periods * T), y, method="DOP853", rtol=1e-11,
+                        atol=1e-14 * bs.scale, dense_output=True)
+        return C @ res.sol(np.linspace(0.0, periods * T, 1000 * periods + 1))
+
+    assert np.abs(motion(y0, 20)).max() <= pack.reach(y0)[0] * (1 + 1e-9)
+    # (1000 samples a period find the peak to (pi / 1000)^2 / 2 = 5e-6 of it)
+    assert pack.reach(orbit)[0] == pytest.approx(np.abs(motion(orbit, 1)).max(), rel=1e-5)
 
 
 def test_one_mode_at_the_tip_is_the_tip_mass_model():
