@@ -509,9 +509,9 @@ def _multipliers(g: _Group, done: dict) -> dict:
     """The Floquet multipliers (largest modulus first) of each settled point of ``done``
     (point -> ((outputs, end state, strobes, level), estimate)): the monodromy of its
     orbit by forward differences at the level reported, or the contact-free map's in
-    closed form where the orbit provably never reaches a stop. Newton's monodromy at the first
-    level is off by that level's discretization error (1e-5 to 1e-4 in the multipliers on
-    the presets), the forward differences' own error is 1e-6 or less."""
+    closed form where the orbit provably never reaches a stop. Newton's monodromy at the
+    first level is off by that level's discretization error (1e-5 to 1e-4 in the
+    multipliers on the presets), the forward differences' own error is 1e-6 or less."""
     settled = [k for k, ((out, *_), _) in done.items() if out[0]["status"] == _SETTLED]
     found = {}
     for lv in sorted({done[k][0][3] for k in settled}):
