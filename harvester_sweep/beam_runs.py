@@ -19,8 +19,7 @@ import numpy as np
 import xarray as xr
 
 from . import modal_map
-from ._engine.modal import HEAD, METRIC_HEAD, metric_size
-from ._engine.modal.kernel import SAMPLES
+from ._engine.modal import HEAD, METRIC_HEAD
 from .acceptance import NEAR, PROOF_MARGIN, on_its_way, periods_to_near, suggested_period
 from .beam_packing import BeamSystem, beam_system, first_steps, pack_beam
 from .beam_parameters import (
@@ -306,8 +305,8 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     packs0 = g.packs(todo, 0)
     D = len(g.starts[0])
     e = np.array(g.starts, dtype=float)
-    s = np.full((n, SAMPLES, D), np.nan)
-    m = np.full((n, metric_size(len(systems[0].system.outputs))), np.nan)
+    s = np.full((n, modal_map.SAMPLES, D), np.nan)
+    m = np.full((n, packs0[0].metric_width), np.nan)
     run, period = np.zeros(n), np.ones(n, dtype=np.int64)
     orbit, jac = np.full((n, D), np.nan), np.full((n, D, D), np.nan)
     free = [k for k in todo if _never_reaches(packs0[k], e[k])]
@@ -501,8 +500,8 @@ def _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, lef
         # run as long as the strobes it reports; at least one period, which the run
         # measures, where the attempt's own run spent the budget)
         rest = g.points[k]["max_periods"] - run[k]
-        whole = chunk >= rest or rest <= 2 * SAMPLES
-        left[k] = max(rest, 1) if whole else min(chunk, rest - 2 * SAMPLES)
+        whole = chunk >= rest or rest <= 2 * modal_map.SAMPLES
+        left[k] = max(rest, 1) if whole else min(chunk, rest - 2 * modal_map.SAMPLES)
 
 
 def _multipliers(g: _Group, done: dict) -> dict:

@@ -23,6 +23,8 @@ from ._engine.modal import REAL, RealFields, complex_fields, real_fields
 #: part is too near a defective matrix (two equal eigenvalues sharing one eigenvector)
 #: for its eigen-coordinates to keep the state's digits [-].
 MAX_CONDITION = 1e8
+#: Stroboscopic samples a run returns, the last ones, oldest first [-].
+SAMPLES = modal.SAMPLES
 #: A call whose work (forcing periods x grid steps per period, summed over its points) is
 #: below this runs on one thread: on a shared machine every thread of a call waits for the
 #: slowest, one that is descheduled most of all, and Newton's rounds make many such calls
@@ -75,6 +77,11 @@ class ModalPoint:
         lam = complex_fields(D, S, 0)[0]
         span = periods * 2.0 * np.pi / self.rrow[RealFields(*real_fields(D, S, 0)).omega]
         return ((self.basis * np.exp(self.crow[lam:lam + D] * span)) @ self.inverse).real
+
+    @property
+    def metric_width(self) -> int:
+        """Columns of the point's metric rows (a run's, a measure's)."""
+        return modal.metric_size(self.dims[2])
 
     @property
     def gaps(self) -> np.ndarray:
