@@ -277,7 +277,16 @@ class _Group:
             if len(step):
                 pick = np.isin(idx, step)
                 delta = np.linalg.solve(J[pick] - np.eye(D), -residual[pick][..., None])[..., 0]
+                before = moved[step].copy()
                 moved[step] = np.abs(delta / scale[step]).max(axis=1)
+                if touched is not None and iteration > 0:
+                    # an attempt's step that does not halve the last has stalled: it is
+                    # given up rather than run (as the tip-mass solver's); a step that
+                    # grew can take the iterate thousands of scales deep into a stop,
+                    # where the contact's sub-steps take the engine minutes a period
+                    stalled = moved[step] > 0.5 * before
+                    live[step[stalled]] = False
+                    delta[stalled] = 0.0
                 if touched is not None and iteration == 0:
                     # (the distance from the orbit: about the first step, and at least
                     # half the motion's move over the run)
