@@ -185,7 +185,7 @@ def spectral_radii(jacobians) -> np.ndarray:
     out = np.full(len(jacobians), np.inf)
     good = np.isfinite(jacobians).all(axis=(1, 2))
     if good.any():
-        out[good] = np.abs(np.linalg.eigvals(jacobians[good])).max(axis=1)
+        out[good] = np.abs(sorted_multipliers(jacobians[good])[:, 0])
     return out
 
 
@@ -330,7 +330,7 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         tested = m[moving, HEAD.status] == _SETTLED
         period[moving] = np.where(tested, np.maximum(m[moving, HEAD.period], 1), 1)
     ended = {k: (m[k], e[k], s[k]) for k in moving if m[k, HEAD.status] == _DIVERGED}
-    _attempts(g, packs0, [k for k in moving if k not in ended], e, s, run, period,
+    _attempts(g, packs0, [k for k in moving if k not in ended], e, run, period,
               np.array([_touched(row) for row in m]), orbit, jac, ended)
     taken = [k for k in todo if k not in ended]
     m, e, s = np.empty_like(m), np.empty_like(e), np.empty_like(s)
@@ -427,9 +427,9 @@ def _on_its_way(g, pack, k, t0, t1, y, jac) -> bool:
     return on_its_way(t0, t1, 1, y, jac, g.scale[k], g.points[k]["settle_tolerance"], NEAR)
 
 
-def _attempts(g, packs, trying, e, s, run, period, touched, orbit, jac, ended) -> None:
+def _attempts(g, packs, trying, e, run, period, touched, orbit, jac, ended) -> None:
     """Newton attempts at the first steps for the points ``trying``, from the motion's
-    states ``e`` (n, D) after ``run`` (n,) periods, with strobes ``s``, at the orbit
+    states ``e`` (n, D) after ``run`` (n,) periods, at the orbit
     periods ``period`` (n,), whether the motion ``touched`` (n,) a stop in its last run,
     as the tip-mass solver makes them (orbits, "Newton only accelerates"): a stable
     orbit the motion is on its way to (_on_its_way) is taken (its state into
@@ -438,7 +438,7 @@ def _attempts(g, packs, trying, e, s, run, period, touched, orbit, jac, ended) -
     for the periods the attempt's monodromy says it needs to come NEAR the orbit) and
     tried again at the period its strobes suggest. A motion that settles by the engine's
     own test, diverges or spends its budget ends (``ended``: point -> its last run's
-    metric row, end state and strobes). ``e``, ``s`` and ``run`` are updated in place.
+    metric row, end state and strobes). ``e`` and ``run`` are updated in place.
 
     Newton converges as readily to a stable orbit of another attractor, which coexists
     with the motion's own near a period doubling or a fold, as to the motion's own: it
@@ -455,7 +455,7 @@ def _attempts(g, packs, trying, e, s, run, period, touched, orbit, jac, ended) -
         m, end, strobes = modal_map.run(g.packs(moving, 0, budget=budget), e[moving])
         trying = []
         for j, k in enumerate(moving):
-            e[k], s[k], touched[k] = end[j], strobes[j], _touched(m[j])
+            e[k], touched[k] = end[j], _touched(m[j])
             run[k] += m[j, HEAD.periods_run]
             left[k] -= m[j, HEAD.periods_run]
             if m[j, HEAD.status] != _NOT_SETTLED or run[k] >= g.points[k]["max_periods"]:
