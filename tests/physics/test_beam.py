@@ -12,8 +12,9 @@ import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from harvester_sweep import bimorph as bm
+from harvester_sweep import modal_map, run_scene
 from harvester_sweep import rod as rd
-from harvester_sweep import run_scene
+from harvester_sweep._engine import STATUS
 from harvester_sweep.beam_packing import first_steps, pack_beam
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
 from harvester_sweep.beam_runs import solve_beam, system_of
@@ -237,3 +238,28 @@ def test_a_graze_found_again_at_its_separation_does_not_stop_time():
     v = sol.values
     assert v["status"][0] in (0, 1) and v["periods_run"][0] <= p["max_periods"] + 2 * 24
     assert np.isfinite(v["power"][0]) and np.isfinite(sol.ends[0]).all()
+
+
+def test_a_state_deep_in_a_stop_is_flagged_diverged_not_run_forever():
+    """A state twenty thousand gaps into the stop (a Newton iterate of a grazing orbit was
+    1 mm deep at 1.4 m/s), far deeper than the contact sub-step resolves: RK4 in contact
+    overflows within the first period. The run is flagged diverged; before, the overflowed
+    state's switch search sent the time to -2^48 s and the period never ended. A point at
+    rest beside it in the same call runs as it does alone, bit for bit."""
+    p = resolve_beam_parameters("bimorph_tip", gap=1e-6, lower_gap=1.5e-6, n_modes=3,
+                                frequency=250.0)
+    bs = system_of(p)
+    pk = pack_beam(p, bs, *first_steps(p, bs))
+    D = pk.dims[0]
+    upper = bs.system.surfaces[0]
+    deep = np.zeros(D)
+    deep[0] = 2e-2 / upper[0]  # the tip 2 cm into the upper stop
+    assert upper @ deep - p["gap"] > 1.9e-2
+    starts = np.array([deep, np.zeros(D)])
+    ends, ok = modal_map.map_states([pk, pk], starts, np.array([1, 1]))
+    alone, ok_alone = modal_map.map_states([pk], starts[1:], np.array([1]))
+    assert not ok[0] and ok[1] and ok_alone[0]
+    assert np.array_equal(ends[1], alone[0])
+    metrics, _, _ = modal_map.run([pk, pk], starts)
+    status = metrics[:, modal_map.modal.HEAD.status]
+    assert status[0] == STATUS.diverged and status[1] != STATUS.diverged

@@ -490,6 +490,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
         nrec = _sample(z, 0.0, st[3] * T, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega,
                        pen, pl, pl2, pen_p, pab, gap, kh, ch, out, outl, out_p, out_f, volt, D, S,
                        K)
+    blown = False  # a contact sub-step's state not finite
     for period in range(periods):
         t, j, on_grid = 0.0, 0, True
         while True:
@@ -583,6 +584,13 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             gap, kh, ch, F, w2, w3, w4, stages, D, S)
                 d1, r1, a1 = _surface(act, zn, t + tau, omega, pen, pl, pl2, pen_p, pab, gap, F,
                                       D, S)
+                if not (math.isfinite(d1) and math.isfinite(r1)):
+                    # the sub-step blew up (a state far deeper in the surface than its
+                    # sub-step resolves, as a Newton iterate can be): the run diverged.
+                    # Searched on as a separation, the state's NaN sent the time to -2^48 s,
+                    # and the period never ended.
+                    blown = True
+                    break
                 c1 = hertz.clip(r1, ch[act])
                 if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
                     z[:] = zn
@@ -616,6 +624,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         if fs == 0.0 or hi - lo <= 4e-16 * (t + hi):
                             break
                         ts = lo - flo * (hi - lo) / (fhi - flo)
+                    if not math.isfinite(fs):
+                        blown = True
+                        break
                     z[:] = zn
                     t += ts
                     last = False
@@ -633,6 +644,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
         # ---- the period's end: its strobe (the next period's samples start from it)
         prev[0] = 0.0
         run += 1
+        if blown:
+            status = DIVERGED
+            break
         for a in range(D):
             v = y_p[a]
             for k in range(D):
