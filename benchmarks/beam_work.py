@@ -6,7 +6,8 @@ The beam's points are solved by their own solver (``beam_runs.solve_beam``): a s
 transient, Newton attempts on the period map with forward-difference monodromies (the
 motion integrated on between them, as the tip-mass solver's), the orbit settled
 again and measured by the modal engine, then the same at twice the steps (chord steps with
-the first monodromy) until the change meets the accuracy target, and the Floquet
+the first monodromy, the orbit they converge to measured) until the change meets the
+accuracy target, and the Floquet
 multipliers by forward differences at the step reported. This counts the modal engine's
 work by what it was run for, in forcing periods at each point's first steps per period (a
 run at twice the steps counts twice), on a gap x frequency grid of each preset at its own
@@ -35,7 +36,7 @@ KINDS = {
     "newton": "Newton's attempts: runs with their copies (the first steps)",
     "measure": "settled again and measured (the first steps)",
     "chord": "chord steps (finer steps)",
-    "finer": "settled again and measured (finer steps)",
+    "finer": "measured, or settled again and measured (finer steps)",
     "multipliers": "multipliers' copies (the step reported)",
 }
 _FIELDS = RealFields(*real_fields(0, 0, 0))
@@ -88,9 +89,10 @@ class Tally:
         self._replace(beam_runs._Group, "measure", self._phase("measure"))
         self._replace(beam_runs, "_multipliers", self._phase("multipliers"))
 
-        def run(saved):
-            def wrapped(packs, starts):
-                out = saved(packs, starts)
+        def runs(saved):
+            # (a run to steady state, or a measure of an orbit: their periods run)
+            def wrapped(packs, *args):
+                out = saved(packs, *args)
                 ratios = self._ratios(packs)
                 kind = self.phase or ("transient" if np.all(ratios == 1.0) else "finer")
                 self._book(packs, out[0][:, beam_runs.HEAD.periods_run], kind, ratios)
@@ -117,7 +119,8 @@ class Tally:
                     self.inside = False
             return wrapped
 
-        self._replace(modal_map, "run", run)
+        self._replace(modal_map, "run", runs)
+        self._replace(modal_map, "measure", runs)
         self._replace(modal_map, "map_states", map_states)
         self._replace(modal_map, "monodromies", monodromies)
         return self

@@ -141,7 +141,7 @@ class _Map:
         y, lam = u[:self.D] * self.scale, u[self.D] * self.span
         q = self.point(lam)
         pk = pack_beam(q, system_of(q), self.steps, self.substep)
-        m = modal_map.measure([pk], [y], [self.periods])
+        m, _, _ = modal_map.measure([pk], [y], [self.periods])
         table, _ = point_outputs(q, system_of(q), m[0])
         return table
 

@@ -366,8 +366,7 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
                        dtype=np.int64)
         # (the first level's monodromies serve the chord steps of every level)
         nt = g.newton(packs, todo, start, per, jac=jac[todo], rounds=CHORD)
-        states = np.where(nt.converged[:, None], nt.states, start)
-        m, e, s = modal_map.run(packs, states)
+        m, e, s = _finer_orbits(packs, start, per, nt)
         nxt = []
         for j, k in enumerate(todo):
             fine = (point_outputs(points[k], systems[k], m[j]), e[j], s[j], lv)
@@ -393,6 +392,25 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         values["spectral_radius"][i] = abs(mult[k][0]) if k in mult else np.nan
         modal[i], ends[i], strobes[i] = amp, end, strobe
         multipliers[i] = mult.get(k, np.full(len(end), np.nan))
+
+
+def _finer_orbits(packs, start, per, chord) -> tuple:
+    """The orbits at a finer level from the coarser ones ``start`` (n, D) of periods
+    ``per`` (n,), and the chord steps there (``chord``): an orbit the chord steps
+    converged to is measured over its period (their last map already repeated it within
+    the settle tolerance, the engine's own test); where they did not, the motion from the
+    coarser orbit settles by that test and is measured (modal_map.run). Returns the metric
+    rows, end states and strobes, as modal_map.run's."""
+    n, D = start.shape
+    m = np.empty((n, packs[0].metric_width))
+    e, s = np.empty((n, D)), np.empty((n, modal_map.SAMPLES, D))
+    took, left = np.flatnonzero(chord.converged), np.flatnonzero(~chord.converged)
+    if len(took):
+        m[took], e[took], s[took] = modal_map.measure([packs[j] for j in took],
+                                                      chord.states[took], per[took])
+    if len(left):
+        m[left], e[left], s[left] = modal_map.run([packs[j] for j in left], start[left])
+    return m, e, s
 
 
 def _touched(row) -> bool:

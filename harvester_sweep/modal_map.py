@@ -158,18 +158,25 @@ def run(packs, starts) -> tuple:
     return metrics, ends, strobes
 
 
-def measure(packs, states, periods) -> np.ndarray:
+def measure(packs, states, periods) -> tuple:
     """Each orbit measured over its ``periods`` (n,) forcing periods from its state (n, D)
-    at phase 0 (``packs`` as run): the metric rows, as run's, with the status settled
-    unless the run diverged."""
+    at phase 0 (``packs`` as run), taken to be on the orbit: the metric rows, as run's,
+    with the status settled unless the run diverged; the end states (n, D) at phase 0; the
+    last SAMPLES strobes (n, SAMPLES, D), oldest first, the measured ones repeated before
+    them, as the orbit's."""
     D, S, K = packs[0].dims
     z = np.array([pk.to_modal(y) for pk, y in zip(packs, states)], dtype=complex)
     rrows = np.array([pk.rrow for pk in packs])
     periods = np.asarray(periods, dtype=np.int64)
     metrics = np.empty((len(packs), modal.metric_size(K)))
+    strobes = np.empty((len(packs), modal.SAMPLES, D))
     modal.measure_points(np.array([pk.crow for pk in packs]), rrows, z, periods, metrics,
-                         _threads(rrows, periods), D, S, K)
-    return metrics
+                         strobes, _threads(rrows, periods), D, S, K)
+    ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
+    back = np.arange(SAMPLES) - SAMPLES  # (periods before the end)
+    for i, p in enumerate(np.clip(periods, 1, SAMPLES)):
+        strobes[i] = strobes[i, SAMPLES - p + back % p]
+    return metrics, ends, strobes
 
 
 def map_states(packs, states, periods) -> tuple:

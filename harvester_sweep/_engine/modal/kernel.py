@@ -793,26 +793,32 @@ def settle_points(crows, rrows, z, metrics, strobes, threads, D, S, K):
 
 
 @njit(parallel=True, **JIT)
-def measure_points(crows, rrows, z, periods, metrics, threads, D, S, K):
+def measure_points(crows, rrows, z, periods, metrics, strobes, threads, D, S, K):
     """Every point's orbit measured over its ``periods[i]`` forcing periods from z (n, D)
     (replaced by the end), taken to be on the orbit: metrics as settle_points', the
-    status SETTLED unless the run diverged; points taken as settle_points does."""
+    status SETTLED unless the run diverged; strobes (n, SAMPLES, D) the last ``periods[i]``
+    strobes (oldest first) at the end, zero before them; points taken as settle_points
+    does."""
     n = crows.shape[0]
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(threads):
         i = fetch_add(taken, 0)
         while i < n:
-            _measure_point(crows[i], rrows[i], z[i], periods[i], metrics[i], D, S, K)
+            _measure_point(crows[i], rrows[i], z[i], periods[i], metrics[i], strobes[i], D, S,
+                           K)
             i = fetch_add(taken, 0)
 
 
 @njit(**JIT)
-def _measure_point(c, r, z, periods, metrics, D, S, K):
+def _measure_point(c, r, z, periods, metrics, ring, D, S, K):
     """One point of measure_points."""
     tables = _tables(c, r, D, S, K)
     pen, pl, pen_p, gap, ch = tables[2], tables[3], tables[5], tables[8], tables[10]
     st = _start(z, r[0], pen, pen_p, pl, gap, ch, D, S)
-    _measure(tables, r, z, st, periods, SETTLED, metrics, np.zeros((SAMPLES, D)), D, S, K)
+    buf = np.zeros((SAMPLES, D))
+    _measure(tables, r, z, st, periods, SETTLED, metrics, buf, D, S, K)
+    for k in range(SAMPLES):
+        ring[k] = buf[(st[3] + k) % SAMPLES]
 
 
 @njit(**JIT)
