@@ -532,7 +532,8 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             mine = found
                             if found < best or bs < 0:
                                 best, bkind, bs = found, kind, s
-                    elif d0 <= 0.0 and d1 <= 0.0 and r0 > 0.0 and r1 < 0.0:
+                    elif (d0 <= 0.0 and d1 <= 0.0 and r0 > 0.0 and r1 < 0.0
+                          and max(d0, d1) + slack[s] > 0.0):
                         tm, dm = _peak(s, z, t, 0.0, tau, omega, lam, pen, pl, pl2, pen_p, pab,
                                        gap, zero, buf, D, S)
                         if dm > 0.0:
