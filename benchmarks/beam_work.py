@@ -94,7 +94,9 @@ class Tally:
             def wrapped(packs, *args):
                 out = saved(packs, *args)
                 ratios = self._ratios(packs)
-                kind = self.phase or ("transient" if np.all(ratios == 1.0) else "finer")
+                kind = self.phase
+                if kind in (None, "measure"):  # (at the first steps, or finer)
+                    kind = (kind or "transient") if np.all(ratios == 1.0) else "finer"
                 self._book(packs, out[0][:, beam_runs.HEAD.periods_run], kind, ratios)
                 return out
             return wrapped

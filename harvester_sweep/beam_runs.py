@@ -298,10 +298,24 @@ class _Group:
                 states[step] += delta
         return Newton(states, jacs, conv, images, far, distance)
 
-    def measure(self, which, lv, states):
-        """The orbits from their fixed points: settled again by the engine's own test (a
-        few periods) and measured."""
-        return modal_map.run(self.packs(which, lv), states)
+    def measure(self, packs, which, states, periods):
+        """The orbits of the fixed points ``states`` (n, D) of P^p, p = ``periods`` (n,),
+        of points ``which`` (``packs``), measured over p periods (modal_map.measure): the
+        metric rows, end states and strobes, as modal_map.run's. An orbit that closes after
+        a divisor d of p too (its strobe after d periods within the settle tolerance of
+        its start, as the tip-mass solver checks) is of period d, its metric row says so.
+        The engine's own test, which a run would settle it by first, finds no orbit longer
+        than modal_map.MAX_ORBIT periods: Newton's orbits of up to SAMPLES - 1 periods
+        were then run to the end of their budget and reported not settled."""
+        m, e, s = modal_map.measure(packs, states, periods)
+        for j, (k, p) in enumerate(zip(which, periods)):
+            tol, scale = self.points[k]["settle_tolerance"], self.scale[k]
+            for d in range(1, p):
+                after = s[j, modal_map.SAMPLES - p + d - 1]  # (the strobe d periods on)
+                if p % d == 0 and np.abs((after - states[j]) / scale).max() <= tol:
+                    m[j, HEAD.period] = d
+                    break
+        return m, e, s
 
 
 def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends, strobes):
@@ -335,7 +349,8 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     taken = [k for k in todo if k not in ended]
     m, e, s = np.empty_like(m), np.empty_like(e), np.empty_like(s)
     if taken:
-        m[taken], e[taken], s[taken] = g.measure(taken, 0, orbit[taken])
+        m[taken], e[taken], s[taken] = g.measure([packs0[k] for k in taken], taken,
+                                                 orbit[taken], period[taken])
         run[taken] += m[taken, HEAD.periods_run]
     for k, (row, end, strobe) in ended.items():
         m[k], e[k], s[k] = row, end, strobe
@@ -364,9 +379,10 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         start = np.array([coarse[k][1] for k in todo])
         per = np.array([max(int(coarse[k][0][0]["orbit_period"]), 1) for k in todo],
                        dtype=np.int64)
-        # (the first level's monodromies serve the chord steps of every level)
+        # (the last monodromy taken serves the chord steps of every finer level)
         nt = g.newton(packs, todo, start, per, jac=jac[todo], rounds=CHORD)
-        m, e, s = _finer_orbits(packs, start, per, nt)
+        nt = _newton_at_level(g, packs, todo, start, per, nt, jac)
+        m, e, s = _finer_orbits(g, packs, todo, start, per, nt)
         nxt = []
         for j, k in enumerate(todo):
             fine = (point_outputs(points[k], systems[k], m[j]), e[j], s[j], lv)
@@ -394,20 +410,58 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         multipliers[i] = mult.get(k, np.full(len(end), np.nan))
 
 
-def _finer_orbits(packs, start, per, chord) -> tuple:
-    """The orbits at a finer level from the coarser ones ``start`` (n, D) of periods
-    ``per`` (n,), and the chord steps there (``chord``): an orbit the chord steps
-    converged to is measured over its period (their last map already repeated it within
-    the settle tolerance, the engine's own test); where they did not, the motion from the
-    coarser orbit settles by that test and is measured (modal_map.run). Returns the metric
-    rows, end states and strobes, as modal_map.run's."""
+def _newton_at_level(g, packs, todo, start, per, chord, jac) -> Newton:
+    """The chord steps ``chord`` at a finer level (over points ``todo``, from their coarser
+    orbits ``start`` (n, D) of periods ``per`` (n,)), with Newton at that level, by
+    copies, from the coarser orbit where they did not converge and the motion from there
+    would take longer to settle by the engine's test than that Newton takes (its D + 1
+    copies and a run to confirm): its stable fixed points are taken as converged, and
+    their monodromies serve the next levels' chord steps (into ``jac``, by point).
+
+    Near a multiplier of modulus near 1 the chord steps with a coarser monodromy stall
+    (I - M nearly singular amplifies its error), and the motion settles slowly too: a
+    point whose coarser orbit settled could spend its whole budget at the finer step and
+    be reported not settled. How long it would take is foretold from the monodromy's
+    spectral radius and the residual at ``start`` (acceptance.periods_to_near)."""
+    D = start.shape[1]
+    slow = []
+    for j, k in enumerate(todo):
+        if chord.converged[j] or not np.isfinite(chord.images[j]).all():
+            continue
+        residual = np.abs((chord.images[j] - start[j]) / g.scale[k]).max()
+        radius = spectral_radii(jac[k][None])[0]
+        # (the engine's test finds no orbit longer than MAX_ORBIT periods)
+        settling = (periods_to_near(per[j], 2 * g.points[k]["settle_tolerance"], residual,
+                                    radius)
+                    if radius < 1 and per[j] <= modal_map.MAX_ORBIT else math.inf)
+        if settling > (D + 2) * per[j]:
+            slow.append(j)
+    if not slow:
+        return chord
+    nt = g.newton([packs[j] for j in slow], [todo[j] for j in slow], start[slow], per[slow])
+    taken = nt.converged & (spectral_radii(nt.jacobians) <= UNSTABLE)
+    states, converged = chord.states.copy(), chord.converged.copy()
+    for i, j in enumerate(slow):
+        if taken[i]:
+            states[j], converged[j], jac[todo[j]] = nt.states[i], True, nt.jacobians[i]
+    return chord._replace(states=states, converged=converged)
+
+
+def _finer_orbits(g, packs, todo, start, per, chord) -> tuple:
+    """The orbits at a finer level of points ``todo`` from the coarser ones ``start``
+    (n, D) of periods ``per`` (n,), and the chord steps there (``chord``): an orbit the
+    chord steps converged to is measured over its period (_Group.measure: their last map
+    already repeated it within the settle tolerance); where they did not, the motion from
+    the coarser orbit settles by the engine's own test and is measured (modal_map.run).
+    Returns the metric rows, end states and strobes, as modal_map.run's."""
     n, D = start.shape
     m = np.empty((n, packs[0].metric_width))
     e, s = np.empty((n, D)), np.empty((n, modal_map.SAMPLES, D))
     took, left = np.flatnonzero(chord.converged), np.flatnonzero(~chord.converged)
     if len(took):
-        m[took], e[took], s[took] = modal_map.measure([packs[j] for j in took],
-                                                      chord.states[took], per[took])
+        m[took], e[took], s[took] = g.measure([packs[j] for j in took],
+                                              [todo[j] for j in took], chord.states[took],
+                                              per[took])
     if len(left):
         m[left], e[left], s[left] = modal_map.run([packs[j] for j in left], start[left])
     return m, e, s

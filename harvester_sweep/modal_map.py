@@ -25,6 +25,8 @@ from ._engine.modal import REAL, RealFields, complex_fields, real_fields
 MAX_CONDITION = 1e8
 #: Stroboscopic samples a run returns, the last ones, oldest first [-].
 SAMPLES = modal.SAMPLES
+#: The longest orbit a run's own steady-state test finds [forcing periods].
+MAX_ORBIT = modal.MAX_ORBIT
 #: A call whose work (forcing periods x grid steps per period, summed over its points) is
 #: below this runs on one thread: on a shared machine every thread of a call waits for the
 #: slowest, one that is descheduled most of all, and Newton's rounds make many such calls
