@@ -266,3 +266,24 @@ def test_a_state_deep_in_a_stop_is_flagged_diverged_not_run_forever():
     metrics, _, _ = modal_map.run([pk, pk], starts)
     status = metrics[:, modal_map.modal.HEAD.status]
     assert status[0] == STATUS.diverged and status[1] != STATUS.diverged
+
+
+def test_a_measured_orbits_strobes_are_its_period_maps():
+    """modal_map.measure over an orbit's p periods returns as strobes the orbit's states
+    d = 1 ... p periods on, each the period map's (modal_map.map_states) from the start,
+    repeated before them as the orbit's; its end state is the last of them."""
+    p, sol = _solve(gap=2.5e-7, frequency=160.0, n_modes=2)
+    bs = system_of(p)
+    period = int(sol.values["orbit_period"][0])
+    assert sol.values["status"][0] == 0 and period == 2
+    steps = int(sol.values["steps_per_period"][0])
+    pk = pack_beam(p, bs, steps, sol.values["contact_step"][0])
+    y = sol.ends[0]
+    _, ends, strobes = modal_map.measure([pk], [y], [period])
+    samples = strobes.shape[1]
+    for d in range(1, period + 1):
+        (mapped,), ok = modal_map.map_states([pk], y[None], [d])
+        assert ok[0]
+        assert np.abs((strobes[0, samples - period + d - 1] - mapped) / bs.scale).max() <= 1e-12
+    assert np.abs((strobes[0, -1] - ends[0]) / bs.scale).max() <= 1e-12
+    assert np.array_equal(strobes[0, :-period], strobes[0, period:])
