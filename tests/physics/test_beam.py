@@ -244,8 +244,8 @@ def test_a_graze_found_again_at_its_separation_does_not_stop_time():
 
 
 def test_a_state_deep_in_a_stop_is_flagged_diverged_not_run_forever():
-    """A state twenty thousand gaps into the stop (a Newton iterate of a grazing orbit was
-    1 mm deep at 1.4 m/s), far deeper than the contact sub-step resolves: RK4 in contact
+    """A state twenty thousand gaps into the stop (a Newton iterate of the beam's solver
+    was 1 mm deep at 1.4 m/s), far deeper than the contact sub-step resolves: RK4 in contact
     overflows within the first period. The run is flagged diverged; before, the overflowed
     state's switch search sent the time to -2^48 s and the period never ended. A point at
     rest beside it in the same call runs as it does alone, bit for bit."""
