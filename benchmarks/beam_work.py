@@ -4,10 +4,10 @@
 
 The beam's points are solved by their own solver (``beam_runs.solve_beam``): a short
 transient, Newton attempts on the period map with forward-difference monodromies (the
-motion integrated on between them, as the tip-mass solver's), the orbit settled
-again and measured by the modal engine, then the same at twice the steps (chord steps with
-the first monodromy, the orbit they converge to measured) until the change meets the
-accuracy target, and the Floquet
+motion integrated on between them, as the tip-mass solver's), the orbit measured by the
+modal engine, then the same at twice the steps (chord steps with the last monodromy taken,
+Newton with copies where they stall and the motion would settle slowly) until the change
+meets the accuracy target, and the Floquet
 multipliers by forward differences at the step reported. This counts the modal engine's
 work by what it was run for, in forcing periods at each point's first steps per period (a
 run at twice the steps counts twice), on a gap x frequency grid of each preset at its own
@@ -34,9 +34,9 @@ PRESETS = ("bimorph_tip", "mak_rod")
 KINDS = {
     "transient": "the motion: transient and pieces between attempts (the first steps)",
     "newton": "Newton's attempts: runs with their copies (the first steps)",
-    "measure": "settled again and measured (the first steps)",
+    "measure": "the orbit measured (the first steps)",
     "chord": "chord steps (finer steps)",
-    "finer": "measured, or settled again and measured (finer steps)",
+    "finer": "the orbit measured, or the motion settled and measured (finer steps)",
     "multipliers": "multipliers' copies (the step reported)",
 }
 _FIELDS = RealFields(*real_fields(0, 0, 0))
