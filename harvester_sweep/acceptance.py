@@ -127,6 +127,19 @@ def never_reaches(row, high, low, e):
 
 
 @njit(**SOLVER_JIT)
+def closing_period(strobes, y, p, scale, tol):
+    """The orbit period [forcing periods] of a fixed point ``y`` (D,) of the p-period map:
+    the smallest divisor d of p whose strobe d periods on is within ``tol`` of ``y``,
+    relative to ``scale`` (D,), else p. ``strobes`` (n, D): the last strobes of a run of
+    p periods from ``y``, oldest first (n > p)."""
+    n = strobes.shape[0]
+    for d in range(1, p):
+        if p % d == 0 and norm(strobes[n - 1 - (p - d)] - y, scale) <= tol:
+            return d
+    return p
+
+
+@njit(**SOLVER_JIT)
 def periods_to_near(p, near, distance, radius):
     """Periods a motion ``distance`` from a stable orbit of period ``p`` and spectral
     radius ``radius`` needs to come to half ``near`` of it (relative to the scales) [-]:

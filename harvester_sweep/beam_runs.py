@@ -20,7 +20,14 @@ import xarray as xr
 
 from . import modal_map
 from ._engine.modal import HEAD, METRIC_HEAD
-from .acceptance import NEAR, PROOF_MARGIN, on_its_way, periods_to_near, suggested_period
+from .acceptance import (
+    NEAR,
+    PROOF_MARGIN,
+    closing_period,
+    on_its_way,
+    periods_to_near,
+    suggested_period,
+)
 from .beam_packing import BeamSystem, beam_system, first_steps, pack_beam
 from .beam_parameters import (
     BEAM_PARAMETERS,
@@ -309,12 +316,8 @@ class _Group:
         were then run to the end of their budget and reported not settled."""
         m, e, s = modal_map.measure(packs, states, periods)
         for j, (k, p) in enumerate(zip(which, periods)):
-            tol, scale = self.points[k]["settle_tolerance"], self.scale[k]
-            for d in range(1, p):
-                after = s[j, modal_map.SAMPLES - p + d - 1]  # (the strobe d periods on)
-                if p % d == 0 and np.abs((after - states[j]) / scale).max() <= tol:
-                    m[j, HEAD.period] = d
-                    break
+            m[j, HEAD.period] = closing_period(s[j], states[j], int(p), self.scale[k],
+                                               self.points[k]["settle_tolerance"])
         return m, e, s
 
 

@@ -68,6 +68,7 @@ from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, NO_STOP, PARAM, STATE, S
 from ._engine.layouts import layout
 from .acceptance import (
     NEAR,
+    closing_period,
     never_reaches,
     norm,
     on_its_way,
@@ -843,11 +844,8 @@ def _converged(T, i, m, centre, strobes, jac, scale, floor):
     p = T.counts[i, _COUNT.p]
     y = T.states[i, _STATES.y, :size].copy()
     # a shorter period that also closes the orbit: solve again at it
-    shorter = 0
-    for d in range(p - 1, 0, -1):
-        if p % d == 0 and norm(strobes[SAMPLES - 1 - (p - d)] - y, scale) <= 10 * floor:
-            shorter = d
-    if shorter > 0:
+    shorter = closing_period(strobes, y, p, scale, 10 * floor)
+    if shorter < p:
         T.counts[i, _COUNT.p] = shorter
         T.counts[i, _COUNT.iteration] = 1  # (the trajectory already ran this attempt)
         T.reals[i, _REAL.last] = np.inf

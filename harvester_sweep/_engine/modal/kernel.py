@@ -521,6 +521,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     # the same graze found again: not taken
                     floor = GRAZE * h if override == TOUCH and s == act else -1.0
                     mine = math.inf  # this surface's touch by the step's ends
+                    # (the step's bound: where it cannot reach zero, no touch lies inside
+                    # the step, and neither search for one runs)
+                    reachable = max(d0, d1) + slack[s] > 0.0
                     if d1 > 0.0 and c1 > 0.0:
                         kind = TOUCH if d0 <= 0.0 else CLIP
                         found = _locate(kind, s, z, t, 0.0, tau, omega, lam, pen, pl, pl2,
@@ -532,8 +535,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             mine = found
                             if found < best or bs < 0:
                                 best, bkind, bs = found, kind, s
-                    elif (d0 <= 0.0 and d1 <= 0.0 and r0 > 0.0 and r1 < 0.0
-                          and max(d0, d1) + slack[s] > 0.0):
+                    elif reachable and d0 <= 0.0 and d1 <= 0.0 and r0 > 0.0 and r1 < 0.0:
                         tm, dm = _peak(s, z, t, 0.0, tau, omega, lam, pen, pl, pl2, pen_p, pab,
                                        gap, zero, buf, D, S)
                         if dm > 0.0:
@@ -543,7 +545,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                                 mine = found
                                 if found < best or bs < 0:
                                     best, bkind, bs = found, TOUCH, s
-                    if max(d0, d1) + slack[s] > 0.0:  # a touch the ends may not show
+                    if reachable:  # a touch the ends may not show
                         found, kind = _hidden(s, z, t, tau, mine, d0, r0, c0, d1, r1, c1,
                                               omega, lam, pen, pl, pl2, pen_p, pab, gap, ch,
                                               zero, buf, stack, D, S)
