@@ -68,6 +68,17 @@ DEPTH = 48
 #: flow from it met the touch again at once, time no longer advancing (a point of the rod's
 #: 64 x 64 grid never ended) [-].
 GRAZE = 1e-9
+#: A component of z that has decayed below this is set to zero at the period's end (in
+#: the units of the state's components). Clear of the stops a damped mode decays as
+#: exp(Re lam t) (the piezo's circuit by about exp(-100) a period), and a motion that
+#: stays clear of them for a few periods takes it into the subnormal numbers, whose
+#: arithmetic costs a hundred times a normal one's on x86: a slowly decaying mode stays
+#: there for hundreds of periods, and a period clear of the stops cost ten times one with
+#: an impact. Far above the subnormals (2.2e-308), so that no product of a kept component
+#: with a row's coefficients reaches them, and far below any state's rounding unit, so
+#: that no output moves. (A mode that decays from it past them within one period spends a
+#: part of that period there, once.)
+TINY = 1e-200
 #: Outcome codes, as the lane engine's STATUS.
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
 #: Kinds of switch that turn a surface's force on or off.
@@ -650,6 +661,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
         if blown:
             status = DIVERGED
             break
+        for k in range(D):
+            if abs(z[k].real) + abs(z[k].imag) < TINY:
+                z[k] = 0j
         for a in range(D):
             v = y_p[a]
             for k in range(D):
