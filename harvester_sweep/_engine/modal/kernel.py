@@ -131,7 +131,13 @@ def _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S):
 def _reach(s, z, t, omega, pen, pl, pen_p, gap, D):
     """Penetration [m] and rate [m/s] of surface s at (z, t): what the contact-free step
     looks at (its rate's own rate is not needed there)."""
-    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    return _reach_at(s, z, math.sin(omega * t), math.cos(omega * t), omega, pen, pl, pen_p,
+                     gap, D)
+
+
+@njit(**JIT)
+def _reach_at(s, z, sn, cs, omega, pen, pl, pen_p, gap, D):
+    """_reach at the time where sin(w t) = sn, cos(w t) = cs."""
     p = pen_p[s]
     return (_dot_re(pen, s, z, D) + _phasor(p, sn, cs) - gap[s],
             _dot_re(pl, s, z, D) + omega * _phasor(p, cs, -sn))
@@ -472,6 +478,13 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     slack = np.empty(S)
     fresh = True
     stack = np.empty((DEPTH, 8))
+    # sin(w t) and cos(w t) at the grid's times j h (the last: T), where every step clear of
+    # the stops ends; as each step computed them
+    sins, coss = np.empty(steps + 1), np.empty(steps + 1)
+    for jj in range(steps + 1):
+        tj = T if jj >= steps else jj * h
+        sins[jj], coss[jj] = math.sin(omega * tj), math.cos(omega * tj)
+    end_d, end_r = np.empty(S), np.empty(S)
     sub1 = np.empty((GRADES + 1, D), np.complex128)
     subh = np.empty((GRADES + 1, D), np.complex128)
     for g in range(GRADES + 1):
@@ -504,11 +517,15 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     blown = False  # a contact sub-step's state not finite
     for period in range(periods):
         t, j, on_grid = 0.0, 0, True
+        # whether end_d, end_r hold the surfaces' penetrations and rates at (z, t): the
+        # last contact-free step's end, where the next one starts
+        known = False
         while True:
             sample = False
             if mode == 0:  # ---- contact-free: exact flow to the next grid time
                 jn = j + 1 if on_grid else int(t / h) + 1
                 target = T if jn >= steps else jn * h
+                jt = min(jn, steps)  # (target's row of sins, coss)
                 tau = target - t
                 if on_grid:
                     for k in range(D):
@@ -521,8 +538,16 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     fresh = False
                 best, bkind, bs = tau, 0, -1
                 for s in range(S):
-                    d0, r0 = _reach(s, z, t, omega, pen, pl, pen_p, gap, D)
-                    d1, r1 = _reach(s, zn, target, omega, pen, pl, pen_p, gap, D)
+                    if known:  # (the last step's end)
+                        d0, r0 = end_d[s], end_r[s]
+                    elif on_grid:
+                        d0, r0 = _reach_at(s, z, sins[j], coss[j], omega, pen, pl, pen_p, gap,
+                                           D)
+                    else:
+                        d0, r0 = _reach(s, z, t, omega, pen, pl, pen_p, gap, D)
+                    d1, r1 = _reach_at(s, zn, sins[jt], coss[jt], omega, pen, pl, pen_p, gap,
+                                       D)
+                    end_d[s], end_r[s] = d1, r1
                     c0, c1 = hertz.clip(r0, ch[s]), hertz.clip(r1, ch[s])
                     if override == TOUCH:
                         d0 = min(d0, 0.0)
@@ -565,6 +590,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             best, bkind, bs = found, kind, s
                 override = -1
                 if bs >= 0:
+                    known = False
                     _flow(lam, z, best, zn, D)
                     z[:] = zn
                     t += best
@@ -582,6 +608,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 else:
                     z[:] = zn
                     t, j, on_grid = target, jn, True
+                    known = True
                     sample = True
             else:  # ---- in contact: RK4 sub-steps in the frame of the flow
                 tau = substep * 0.5 ** (GRADES - grade)
