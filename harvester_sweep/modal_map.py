@@ -18,6 +18,7 @@ import scipy.linalg
 
 from ._engine import modal
 from ._engine.modal import REAL, RealFields, complex_fields, real_fields
+from ._engine.scheduler import SHORT_CALL
 
 #: The largest condition number of the eigenvector basis accepted: beyond it the linear
 #: part is too near a defective matrix (two equal eigenvalues sharing one eigenvector)
@@ -27,11 +28,6 @@ MAX_CONDITION = 1e8
 SAMPLES = modal.SAMPLES
 #: The longest orbit a run's own steady-state test finds [forcing periods].
 MAX_ORBIT = modal.MAX_ORBIT
-#: A call whose work (forcing periods x grid steps per period, summed over its points) is
-#: below this runs on one thread: on a shared machine every thread of a call waits for the
-#: slowest, one that is descheduled most of all, and Newton's rounds make many such calls
-#: (as the lane engine's scheduler.SHORT_CALL) [grid steps].
-SHORT_CALL = 200_000
 
 
 @dataclass
@@ -155,7 +151,7 @@ def run(packs, starts) -> tuple:
     rrows = np.array([pk.rrow for pk in packs])
     metrics = np.empty((len(packs), modal.metric_size(K)))
     strobes = np.empty((len(packs), modal.SAMPLES, D))
-    modal.settle_points(crows, rrows, z, metrics, strobes, _threads(rrows, None), D, S, K)
+    modal.settle_points(crows, rrows, z, metrics, strobes, _threads(rrows, None, D), D, S, K)
     ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
     return metrics, ends, strobes
 
@@ -173,7 +169,7 @@ def measure(packs, states, periods) -> tuple:
     metrics = np.empty((len(packs), modal.metric_size(K)))
     strobes = np.empty((len(packs), modal.SAMPLES, D))
     modal.measure_points(np.array([pk.crow for pk in packs]), rrows, z, periods, metrics,
-                         strobes, _threads(rrows, periods), D, S, K)
+                         strobes, _threads(rrows, periods, D), D, S, K)
     ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
     back = np.arange(SAMPLES) - SAMPLES  # (periods before the end)
     for i, p in enumerate(np.clip(periods, 1, SAMPLES)):
@@ -191,7 +187,7 @@ def map_states(packs, states, periods) -> tuple:
     rrows = np.array([pk.rrow for pk in packs])
     periods = np.asarray(periods, dtype=np.int64)
     modal.map_points(np.array([pk.crow for pk in packs]), rrows, z, periods, ok,
-                     _threads(rrows, periods), D, S, K)
+                     _threads(rrows, periods, D), D, S, K)
     return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok
 
 
@@ -219,13 +215,23 @@ def monodromies(packs, states, periods, steps, central=False) -> tuple:
     return jac, ends[:, 0], ok.reshape(n, copies).all(axis=1)
 
 
-def _threads(rrows, periods) -> int:
-    """Threads for a call of the engine on points ``rrows`` over ``periods`` each (None:
-    their budgets): one for a short call (SHORT_CALL), else numba's count, at most one per
-    point."""
+def _threads(rrows, periods, D) -> int:
+    """Threads for a call of the engine on points ``rrows`` of state size D over
+    ``periods`` each (None: their budgets): numba's count, at most one per point, but one
+    for a short call.
+
+    A call whose work is below the lane engine's scheduler.SHORT_CALL runs on one thread:
+    on a shared machine every thread of a call waits for the slowest, one that is
+    descheduled most of all, and Newton's rounds make many such calls. The work is counted
+    in that engine's unit, an RK4 step of one point, of which a grid step of this engine
+    costs about D: a complex product and a share of each surface's penetration for each of
+    its D components, in scalar code, against an RK4 step of the three-state tip-mass model
+    shared by a vector's lanes (benchmarks/results/modal_period.md); contact costs more.
+    Counted in grid steps alone, calls of tens of milliseconds (an orbit measured for each
+    of 64 points) ran on one thread."""
     f = RealFields(*real_fields(0, 0, 0))
     periods = rrows[:, f.max_periods] if periods is None else periods
-    if float(np.sum(periods * rrows[:, f.steps])) < SHORT_CALL:
+    if float(np.sum(periods * rrows[:, f.steps])) * D < SHORT_CALL:
         return 1
     return max(1, min(numba.get_num_threads(), len(rrows)))
 

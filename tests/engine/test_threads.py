@@ -41,3 +41,25 @@ def test_openmp_threads_sleep_unless_the_user_says_otherwise():
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                              text=True, check=True).stdout.strip()
         assert out == expected
+
+
+def test_a_modal_call_counts_a_grid_step_as_its_state_size_in_lane_steps():
+    """The modal engine's call runs on one thread where its work is short by the lane
+    engine's SHORT_CALL, a grid step of a point of state size D counted as D of that
+    engine's RK4 steps: 64 beam points of 11 states measured over a period each (tens of
+    milliseconds of work, fewer grid steps than SHORT_CALL) take the threads; one point
+    over one period does not."""
+    from harvester_sweep import modal_map
+    from harvester_sweep.beam_packing import first_steps, pack_beam
+    from harvester_sweep.beam_parameters import resolve_beam_parameters
+    from harvester_sweep.beam_runs import system_of
+
+    p = resolve_beam_parameters("bimorph_tip")
+    bs = system_of(p)
+    pk = pack_beam(p, bs, *first_steps(p, bs))
+    D = pk.dims[0]
+    rrows = np.repeat(pk.rrow[None, :], 64, axis=0)
+    steps = rrows[0, modal_map.RealFields(*modal_map.real_fields(0, 0, 0)).steps]
+    assert 64 * steps < SHORT_CALL <= 64 * steps * D
+    assert modal_map._threads(rrows, np.ones(64), D) == min(numba.get_num_threads(), 64)
+    assert modal_map._threads(rrows[:1], np.ones(1), D) == 1
