@@ -10,6 +10,7 @@ eigenvector basis would lose those digits in every change of coordinates.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numba
@@ -103,14 +104,7 @@ def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resista
     M = np.asarray(system.matrix, dtype=float)
     D, S, K = len(M), len(system.surfaces), len(system.outputs)
     omega = 2.0 * np.pi * frequency
-    balanced, (t, _) = scipy.linalg.matrix_balance(M, permute=False, separate=True)
-    lam, vectors = np.linalg.eig(balanced)
-    if np.linalg.cond(vectors) > MAX_CONDITION:
-        raise ValueError("the linear system is too near a defective matrix for its "
-                         "eigen-coordinates (condition number of its eigenvectors "
-                         f"{np.linalg.cond(vectors):.3g} > {MAX_CONDITION:.0e})")
-    W = t[:, None] * vectors
-    Winv = np.linalg.inv(vectors) / t[None, :]
+    lam, W, Winv = _eigenbasis(M.tobytes(), D)
     P = np.linalg.solve(1j * omega * np.eye(D) - M, np.asarray(system.forcing) * amplitude)
     h = 1.0 / (frequency * steps)
     lam_o, grid_o, pen_o, inp_o, penp_o, out_o, outp_o, strobe_o, size = complex_fields(D, S, K)
@@ -138,6 +132,26 @@ def pack(system, frequency, amplitude, hertz_stiffness, contact_damping, resista
     r[scale_o:scale_o + D] = scale
     r[yp_o:yp_o + D] = P.imag
     return ModalPoint(c, r, W, Winv, P, (D, S, K))
+
+
+@functools.lru_cache(maxsize=64)
+def _eigenbasis(matrix: bytes, D: int) -> tuple:
+    """The eigenvalues lam (D,) of the matrix (D, D) given by its float64 bytes, and its
+    eigenvector basis W (D, D) and inverse, of the balanced matrix; remembered, as the
+    points of a sweep share their system whatever their frequency, gap or step (read-only
+    arrays)."""
+    M = np.frombuffer(matrix, dtype=float).reshape(D, D)
+    balanced, (t, _) = scipy.linalg.matrix_balance(M, permute=False, separate=True)
+    lam, vectors = np.linalg.eig(balanced)
+    if np.linalg.cond(vectors) > MAX_CONDITION:
+        raise ValueError("the linear system is too near a defective matrix for its "
+                         "eigen-coordinates (condition number of its eigenvectors "
+                         f"{np.linalg.cond(vectors):.3g} > {MAX_CONDITION:.0e})")
+    W = t[:, None] * vectors
+    Winv = np.linalg.inv(vectors) / t[None, :]
+    for a in (lam, W, Winv):
+        a.flags.writeable = False
+    return lam, W, Winv
 
 
 def run(packs, starts) -> tuple:
