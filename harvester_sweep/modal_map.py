@@ -240,9 +240,7 @@ def _threads(rrows, periods, D) -> int:
     in that engine's unit, an RK4 step of one point, of which a grid step of this engine
     costs about D: a complex product and a share of each surface's penetration for each of
     its D components, in scalar code, against an RK4 step of the three-state tip-mass model
-    shared by a vector's lanes (benchmarks/results/modal_period.md); contact costs more.
-    Counted in grid steps alone, calls of tens of milliseconds (an orbit measured for each
-    of 64 points) ran on one thread."""
+    shared by a vector's lanes (benchmarks/results/modal_period.md); contact costs more."""
     f = RealFields(*real_fields(0, 0, 0))
     periods = rrows[:, f.max_periods] if periods is None else periods
     if float(np.sum(periods * rrows[:, f.steps])) * D < SHORT_CALL:

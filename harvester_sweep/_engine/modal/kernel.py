@@ -72,12 +72,11 @@ GRAZE = 1e-9
 #: the units of the state's components). Clear of the stops a damped mode decays as
 #: exp(Re lam t) (the piezo's circuit by about exp(-100) a period), and a motion that
 #: stays clear of them for a few periods takes it into the subnormal numbers, whose
-#: arithmetic costs a hundred times a normal one's on x86: a slowly decaying mode stays
-#: there for hundreds of periods, and a period clear of the stops cost ten times one with
-#: an impact. Far above the subnormals (2.2e-308), so that no product of a kept component
-#: with a row's coefficients reaches them, and far below any state's rounding unit, so
-#: that no output moves. (A mode that decays from it past them within one period spends a
-#: part of that period there, once.)
+#: arithmetic costs about a hundred times a normal one's on x86, and a slowly decaying
+#: mode stays there for hundreds of periods. Far above the subnormals (2.2e-308), so that
+#: no product of a kept component with a row's coefficients reaches them, and far below
+#: any state's rounding unit, so that no output moves. (A mode that decays from it past
+#: them within one period spends a part of that period there, once.)
 TINY = 1e-200
 #: Outcome codes, as the lane engine's STATUS.
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
@@ -103,7 +102,10 @@ def _phasor(p, sn, cs):
     return p.real * sn + p.imag * cs
 
 
-@njit(**JIT)
+# (_forces and _surface are compiled into their callers: a contact sub-step takes the
+# forces five times and a sample that books the outputs takes both, and inlined they run
+# faster there; benchmarks/results/modal_period.md)
+@njit(inline="always", **JIT)
 def _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S):
     """Each surface's force F[s] [N] at (z, t)."""
     sn, cs = math.sin(omega * t), math.cos(omega * t)
@@ -113,7 +115,7 @@ def _forces(z, t, omega, pen, pl, pen_p, gap, kh, ch, F, D, S):
         F[s] = hertz.force(kh[s], d, r, ch[s])
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, F, D, S):
     """Penetration [m], rate [m/s] and its rate [m/s^2] of surface s at (z, t) with the
     forces F [N] acting."""
