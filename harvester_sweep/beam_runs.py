@@ -24,6 +24,7 @@ from .acceptance import (
     NEAR,
     PROOF_MARGIN,
     closing_period,
+    norm,
     on_its_way,
     periods_to_near,
     suggested_period,
@@ -431,7 +432,7 @@ def _newton_at_level(g, packs, todo, start, per, chord, jac) -> Newton:
     for j, k in enumerate(todo):
         if chord.converged[j] or not np.isfinite(chord.images[j]).all():
             continue
-        residual = np.abs((chord.images[j] - start[j]) / g.scale[k]).max()
+        residual = norm(chord.images[j] - start[j], g.scale[k])
         radius = spectral_radii(jac[k][None])[0]
         # (the engine's test finds no orbit longer than MAX_ORBIT periods)
         settling = (periods_to_near(per[j], 2 * g.points[k]["settle_tolerance"], residual,

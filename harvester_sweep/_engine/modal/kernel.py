@@ -486,6 +486,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     for jj in range(steps + 1):
         tj = T if jj >= steps else jj * h
         sins[jj], coss[jj] = math.sin(omega * tj), math.cos(omega * tj)
+    # each surface's penetration and rate at the last contact-free step's end
     end_d, end_r = np.empty(S), np.empty(S)
     sub1 = np.empty((GRADES + 1, D), np.complex128)
     subh = np.empty((GRADES + 1, D), np.complex128)
@@ -519,9 +520,6 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     blown = False  # a contact sub-step's state not finite
     for period in range(periods):
         t, j, on_grid = 0.0, 0, True
-        # whether end_d, end_r hold the surfaces' penetrations and rates at (z, t): the
-        # last contact-free step's end, where the next one starts
-        known = False
         while True:
             sample = False
             if mode == 0:  # ---- contact-free: exact flow to the next grid time
@@ -540,11 +538,8 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     fresh = False
                 best, bkind, bs = tau, 0, -1
                 for s in range(S):
-                    if known:  # (the last step's end)
+                    if on_grid and j > 0:  # (a whole step's end: z and t as it left them)
                         d0, r0 = end_d[s], end_r[s]
-                    elif on_grid:
-                        d0, r0 = _reach_at(s, z, sins[j], coss[j], omega, pen, pl, pen_p, gap,
-                                           D)
                     else:
                         d0, r0 = _reach(s, z, t, omega, pen, pl, pen_p, gap, D)
                     d1, r1 = _reach_at(s, zn, sins[jt], coss[jt], omega, pen, pl, pen_p, gap,
@@ -592,7 +587,6 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             best, bkind, bs = found, kind, s
                 override = -1
                 if bs >= 0:
-                    known = False
                     _flow(lam, z, best, zn, D)
                     z[:] = zn
                     t += best
@@ -610,7 +604,6 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 else:
                     z[:] = zn
                     t, j, on_grid = target, jn, True
-                    known = True
                     sample = True
             else:  # ---- in contact: RK4 sub-steps in the frame of the flow
                 tau = substep * 0.5 ** (GRADES - grade)
