@@ -645,12 +645,14 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                                       gap, ch, F, D, S)
                     lo, hi, flo, fhi = 0.0, tau, f0, f1
                     ts = tau * hermite.root(f0, df0, f1, df1, tau, 0.0)
+                    reached = 0.0
                     for _ in range(SECANT):
                         if not (lo < ts < hi):
                             ts = 0.5 * (lo + hi)
                         _exps(lam, ts, e1, eh, D)
                         _lawson(z, t, ts, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
                                 w2, w3, w4, stages, D, S)
+                        reached = ts  # (zn is the state at t + reached)
                         fs, dfs = _switch(kind, act, zn, t + ts, omega, pen, pl, pl2, pen_p, pab,
                                           gap, ch, F, D, S)
                         if fs > 0.0:
@@ -664,7 +666,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         blown = True
                         break
                     z[:] = zn
-                    t += ts
+                    t += reached
                     last = False
                     mode, override = 0, kind
                     on_grid = False
