@@ -645,14 +645,16 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                                       gap, ch, F, D, S)
                     lo, hi, flo, fhi = 0.0, tau, f0, f1
                     ts = tau * hermite.root(f0, df0, f1, df1, tau, 0.0)
-                    reached = 0.0
-                    for _ in range(SECANT):
+                    # (the secant's next estimate is taken at the top of the loop, so that
+                    # ts stays the time of zn, the last state computed, when the loop ends)
+                    for i in range(SECANT):
+                        if i > 0:
+                            ts = lo - flo * (hi - lo) / (fhi - flo)
                         if not (lo < ts < hi):
                             ts = 0.5 * (lo + hi)
                         _exps(lam, ts, e1, eh, D)
                         _lawson(z, t, ts, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
                                 w2, w3, w4, stages, D, S)
-                        reached = ts  # (zn is the state at t + reached)
                         fs, dfs = _switch(kind, act, zn, t + ts, omega, pen, pl, pl2, pen_p, pab,
                                           gap, ch, F, D, S)
                         if fs > 0.0:
@@ -661,12 +663,11 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                             hi, fhi = ts, fs
                         if fs == 0.0 or hi - lo <= 4e-16 * (t + hi):
                             break
-                        ts = lo - flo * (hi - lo) / (fhi - flo)
                     if not math.isfinite(fs):
                         blown = True
                         break
                     z[:] = zn
-                    t += reached
+                    t += ts
                     last = False
                     mode, override = 0, kind
                     on_grid = False
