@@ -169,6 +169,7 @@ _REAL = layout("RealRow", (
     ("max_steps", "most steps per period of a re-solve"),
     ("coarser_steps", "steps per period of the last solve"),
     ("coarser_error", "... and its error estimate [-]"),
+    ("settling", "Newton's nearness that ends an attempt at an orbit it cannot take [-]"),
 ))
 #: A point's whole numbers (_Points.counts).
 _COUNT = layout("CountRow", (
@@ -273,7 +274,7 @@ class Orbits:
 
 
 def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
-                 max_steps=None, samples=0, on_points=None) -> Orbits:
+                 max_steps=None, samples=0, on_points=None, settling=SETTLING) -> Orbits:
     """Every point's steady state as a periodic orbit of the RK4 period map.
 
     Parameters
@@ -297,6 +298,11 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     on_points : callable, optional
         Called with the number of points newly finished after each round of runs; what it
         raises (KeyboardInterrupt included) stops the solve and is raised again.
+    settling : float
+        An attempt's iterates end once within this of an orbit they cannot take (relative
+        to the scales, SETTLING) [-]; below 0 they never do (every attempt converges),
+        which the tests compare against. A run-time value, not a constant compiled in, so
+        that changing it compiles nothing.
 
     The rounds run in compiled code: all of them in one call without ``on_points``, else
     one a call, so that progress is told and an interrupt seen between rounds.
@@ -308,7 +314,8 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
                   np.full(n, -1) if successors is None else np.asarray(successors),
                   np.zeros(n, bool) if estimated is None else np.asarray(estimated, bool),
                   np.full(n, np.nan) if accuracy is None else np.asarray(accuracy, float),
-                  np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float))
+                  np.full(n, np.inf) if max_steps is None else np.asarray(max_steps, float),
+                  settling)
     linked = pts.counts[pts.counts[:, _COUNT.successors] >= 0, _COUNT.successors]
     heads = np.ones(n, bool)
     heads[linked] = False
@@ -329,7 +336,7 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
             return _result(pts, samples)
 
 
-def _points(rows, states, successors, estimated, accuracy, max_steps) -> _Points:
+def _points(rows, states, successors, estimated, accuracy, max_steps, settling) -> _Points:
     """The solve's points before any run: each waiting (_WAITING)."""
     n, size = len(rows), state_size(rows)
     reals = np.zeros((n, len(_REAL)))
@@ -337,6 +344,7 @@ def _points(rows, states, successors, estimated, accuracy, max_steps) -> _Points
     reals[:, [_REAL.steps, _REAL.orbit_steps]] = rows[:, PARAM.steps, None]
     reals[:, [_REAL.errors, _REAL.coarser_steps, _REAL.coarser_error]] = np.nan
     reals[:, _REAL.accuracy], reals[:, _REAL.max_steps] = accuracy, max_steps
+    reals[:, _REAL.settling] = settling
     counts = np.zeros((n, len(_COUNT)), dtype=np.int64)
     counts[:, _COUNT.phase] = _WAITING
     counts[:, [_COUNT.p, _COUNT.t1_periods]] = 1
@@ -712,7 +720,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     # state at the attempt's start (on_its_way takes an orbit with contact from within
     # NEAR of it; the steps left add up to about this one)
     later = not opening and not trajectory and good and touched and not converged \
-        and T.counts[i, _COUNT.refine] == 0 and size_ <= SETTLING \
+        and T.counts[i, _COUNT.refine] == 0 and size_ <= T.reals[i, _REAL.settling] \
         and size_ <= 0.5 * T.reals[i, _REAL.last]
     if later:
         d0 = norm(T.components[i, _COMPONENTS.t0] - (y + step), scale)
@@ -1077,7 +1085,7 @@ def compile_solver() -> None:
     running a point (the table's types are the same for any size of the state)."""
     period_map.compile_engine()
     pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
-                  np.zeros(0, bool), np.zeros(0), np.zeros(0))
+                  np.zeros(0, bool), np.zeros(0), np.zeros(0), SETTLING)
     _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
     _rounds(pts, 1, False)  # (and the _round it calls)
 

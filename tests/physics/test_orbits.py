@@ -476,23 +476,6 @@ def test_a_motion_that_does_not_settle_reports_its_last_periods(gap_index, frequ
                                   reference[:METRIC.orbit_period])
 
 
-def _solver_with(**constants):
-    """orbits.solve_orbits with some of the solver's constants changed: its compiled
-    functions compiled again (not cached) where they read them, at the values given."""
-    import types
-
-    import numba
-
-    namespace = dict(vars(orbits), **constants)
-    for name, value in vars(orbits).items():
-        if isinstance(value, numba.core.registry.CPUDispatcher) \
-                and value.py_func.__module__ == orbits.__name__:
-            function = types.FunctionType(value.py_func.__code__, namespace, name)
-            namespace[name] = numba.njit(error_model="numpy")(function)
-    return types.FunctionType(orbits.solve_orbits.__code__, namespace, "solve_orbits",
-                              orbits.solve_orbits.__defaults__)
-
-
 def test_attempts_end_at_an_orbit_they_could_not_take():
     """Gap 2.54 um, 112.7 Hz: the motion never settles (the transient engine's own test at
     the same budget says so), and its contact comes and goes. From a first run without
@@ -506,8 +489,7 @@ def test_attempts_end_at_an_orbit_they_could_not_take():
     assert reference[0, METRIC.status] == STATUS.not_settled
     rounds = {}
     for settling in (orbits.SETTLING, -1.0):  # (-1: every attempt converges)
-        solve = solve_orbits if settling == orbits.SETTLING else _solver_with(SETTLING=settling)
-        solved = solve(packed.rows, packed.states)
+        solved = solve_orbits(packed.rows, packed.states, settling=settling)
         assert solved.metrics[0, METRIC.status] == STATUS.not_settled
         assert solved.metrics[0, METRIC.periods_run] == packed.rows[0, PARAM.max_periods]
         rounds[settling] = solved.rounds[0]
