@@ -514,7 +514,9 @@ def _round(T, threads):
         k, width = first[i], first[i + 1] - first[i]
         if width == 0:
             continue
-        ok = True
+        # (not the literal True: numba would compile _newton and _estimate for that type
+        # too, on their way to the bool the loop makes of it)
+        ok = width > 0
         for w in range(width):
             ok = ok and sane_run(metrics[k + w])
             for c in range(size):

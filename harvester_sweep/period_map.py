@@ -205,7 +205,10 @@ def run_lanes(params, states, metrics, strobes, most):
     outputs ``metrics`` and ``strobes`` as the engine's) in one engine call from compiled
     code, on at most ``most`` threads, the engine's steady-state test on (it never ends a
     run of MAX_ORBIT_PERIOD periods or fewer)."""
-    _engine.run_independent(params, states, metrics, strobes, True, most)
+    # (a bool, not the literal True: numba compiles a function again for each literal
+    # value it is called with, and the engine's queue is compiled for a bool already, by
+    # the calls from Python)
+    _engine.run_independent(params, states, metrics, strobes, np.bool_(True), most)
 
 
 @njit(**SOLVER_JIT)
