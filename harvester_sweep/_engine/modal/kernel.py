@@ -858,7 +858,9 @@ def _measure_point(c, r, z, periods, metrics, ring, D, S, K):
     pen, pl, pen_p, gap, ch = tables[2], tables[3], tables[5], tables[8], tables[10]
     st = _start(z, r[0], pen, pen_p, pl, gap, ch, D, S)
     buf = np.zeros((SAMPLES, D))
-    _measure(tables, r, z, st, periods, SETTLED, metrics, buf, D, S, K)
+    # (SETTLED as an int64, not the literal: numba compiles _measure again for each
+    # literal value)
+    _measure(tables, r, z, st, periods, np.int64(SETTLED), metrics, buf, D, S, K)
     for k in range(SAMPLES):
         ring[k] = buf[(st[3] + k) % SAMPLES]
 
