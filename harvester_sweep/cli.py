@@ -279,7 +279,7 @@ def _announce_compilation() -> None:
 
     if not solver_ready():
         print("harvester-sweep: compiling the RK4 kernel and the orbit solver into numba's "
-              "on-disk cache (first run only, 1-3 minutes)", file=sys.stderr, flush=True)
+              "on-disk cache (first run only, a few minutes)", file=sys.stderr, flush=True)
 
 
 def _scene(args) -> int:
@@ -782,7 +782,7 @@ def _announce_beam_compilation() -> None:
         return
     if not warm:
         print("harvester-sweep: compiling the beam's modal engine into numba's on-disk "
-              "cache (first run only, about a minute)", file=sys.stderr, flush=True)
+              "cache (first run only, a few minutes)", file=sys.stderr, flush=True)
 
 
 #: The beam's outputs shown as whole numbers.

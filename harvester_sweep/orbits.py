@@ -299,10 +299,10 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
         Called with the number of points newly finished after each round of runs; what it
         raises (KeyboardInterrupt included) stops the solve and is raised again.
     settling : float
-        An attempt's iterates end once within this of an orbit they cannot take (relative
-        to the scales, SETTLING) [-]; below 0 they never do (every attempt converges),
-        which the tests compare against. A run-time value, not a constant compiled in, so
-        that changing it compiles nothing.
+        An attempt's iterates end once within this of an orbit they cannot take, relative
+        to the scales [-] (default SETTLING); below 0 they never do and every attempt
+        converges, which the tests compare against. A value at run time, not a constant
+        compiled in, so that changing it compiles nothing.
 
     The rounds run in compiled code: all of them in one call without ``on_points``, else
     one a call, so that progress is told and an interrupt seen between rounds.
