@@ -102,13 +102,14 @@ def main(argv=None) -> None:
 
     lines = ["# A first run's compile time", "", provenance(),
              "Command: python -m benchmarks.compile_time", "",
-             "| first run | compiles | s | functions compiled more than once |",
-             "| --- | --- | ---: | --- |"]
+             "| first run | compile time | functions compiled more than once (times) |",
+             "| --- | --- | --- |"]
     for which in ("tip_mass", "beam"):
         result = _measured(which)
-        repeated = ", ".join(f"{name} ({n})" for name, n in result["repeated"].items())
-        for what, seconds in result["times"].items():
-            lines.append(f"| {which} | {what} | {seconds:.1f} | {repeated or 'none'} |")
+        times = ", ".join(f"{what} {seconds:.1f} s" for what, seconds in result["times"].items())
+        repeated = ", ".join(f"`{name.removeprefix(PACKAGE + '.')}` ({n})"
+                             for name, n in result["repeated"].items())
+        lines.append(f"| {which} | {times} | {repeated or 'none'} |")
     report(lines, args.output)
 
 
