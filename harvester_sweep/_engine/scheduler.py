@@ -312,8 +312,8 @@ def _run_threads(params, states, metrics, strobes, successors, heads, control, s
     so that the threads end together whatever the lines cost."""
     no_series = np.empty((0, len(SERIES)))
     for b in prange(len(control) - 2):
-        # (b as int64, the type record_series calls with: numba types a prange index as
-        # int64 and as uint64 in different passes, and would compile the queue for each)
+        # (b as int64, the type record_series calls with: numba compiled the queue for the
+        # prange index both as int64 and as uint64)
         _run_queue(params, states, metrics, strobes, no_series, settle, heads, successors,
                    control, np.int64(b))
 
