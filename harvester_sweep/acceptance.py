@@ -17,11 +17,10 @@ point, compiled: the orbit solver calls them inside its rounds.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from . import dense
 from ._engine import METRIC, N_RIGID, PARAM
-from .jit import SOLVER_JIT
+from .jit import SOLVER_JIT, njit
 from .models import tip_mass
 
 #: A motion is in an orbit's linear regime when the monodromy predicts its next p periods

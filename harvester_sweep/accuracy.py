@@ -10,10 +10,9 @@ solved again at the step the fourth order asks for (:func:`refined_steps`).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from ._engine import METRIC
-from .jit import SOLVER_JIT
+from .jit import SOLVER_JIT, njit
 
 #: Re-solves at a finer step for the accuracy target [-].
 REFINEMENTS = 3

@@ -12,9 +12,8 @@ decisions are sensitive to it.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from .jit import SOLVER_JIT
+from .jit import SOLVER_JIT, njit
 
 
 @njit(**SOLVER_JIT)

@@ -10,9 +10,23 @@ vector code and which steps run scalar code is decided by the point's own state
 counts). No nnan/ninf either: the divergence check relies on isfinite. nsz and arcp let
 LLVM vectorize the lane loop, which has no division, so that arcp cannot make a vector
 lane differ from scalar code.
+
+Every compiled function of the package is made by :func:`njit`, numba's with its on-disk
+cache made safe for processes that compile at once (_LockedCacheFile).
 """
 
 from __future__ import annotations
+
+import contextlib
+import os
+
+import numba
+from numba.core.caching import IndexDataCacheFile
+
+try:
+    import fcntl
+except ImportError:  # (not POSIX: the cache is used as numba leaves it)
+    fcntl = None
 
 FASTMATH = frozenset({"nsz", "arcp", "contract"})
 JIT = dict(cache=True, fastmath=set(FASTMATH), error_model="numpy")
@@ -21,3 +35,54 @@ JIT = dict(cache=True, fastmath=set(FASTMATH), error_model="numpy")
 #: IEEE arithmetic, no contraction or reassociation, so that an expression rounds as
 #: the same expression in numpy does.
 SOLVER_JIT = dict(cache=True, error_model="numpy")
+
+
+class _LockedCacheFile(IndexDataCacheFile):
+    """numba's cache of one function (an index of signatures and a data file for each),
+    read and written under a lock on its folder.
+
+    numba saves a new signature by reading the index, taking the first data file name the
+    index does not use, and writing the index and then the data file, with no lock. Two
+    processes that first compile different signatures of one function at once (two test
+    workers, two sweeps of different models, Dask workers) can take the same name: the
+    index can end up naming one signature's file while the file holds the other's machine
+    code, which every later process loads and runs for it (numba issue #10128). Under the
+    lock a save is whole before any other process reads or saves, and a load reads an
+    index and the file it names from one state. Compiling stays outside the lock.
+    """
+
+    @contextlib.contextmanager
+    def _locked(self, exclusive: bool):
+        try:
+            handle = open(os.path.join(self._cache_path, "harvester-sweep-cache.lock"), "a")
+        except OSError:  # no folder yet (nothing to read), or one not writable
+            yield
+            return
+        with handle:
+            fcntl.flock(handle, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+            yield  # (closing the file releases the lock)
+
+    def save(self, key, data):
+        with self._locked(True):
+            super().save(key, data)
+
+    def load(self, key):
+        with self._locked(False):
+            return super().load(key)
+
+    def flush(self):
+        with self._locked(True):
+            super().flush()
+
+
+def njit(**options):
+    """numba.njit with ``options`` (JIT or SOLVER_JIT), its cache locked (_LockedCacheFile)."""
+    def compiled(function):
+        dispatcher = numba.njit(**options)(function)
+        cache = getattr(dispatcher, "_cache", None)
+        if fcntl is not None and isinstance(getattr(cache, "_cache_file", None),
+                                            IndexDataCacheFile):
+            cache._cache_file.__class__ = _LockedCacheFile
+        return dispatcher
+
+    return compiled

@@ -61,7 +61,6 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numba import njit
 
 from . import acceptance, accuracy, dense, period_map
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, NO_STOP, PARAM, STATE, STATUS, cache
@@ -78,7 +77,7 @@ from .acceptance import (
     suggested_period,
 )
 from .accuracy import REFINEMENTS, STEPS_QUANTUM, halving_error, refined_steps
-from .jit import SOLVER_JIT
+from .jit import SOLVER_JIT, njit
 from .models import tip_mass
 from .period_map import (
     BOTH_WAYS,

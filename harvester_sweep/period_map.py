@@ -20,11 +20,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from . import _engine
 from ._engine import METRIC, N_RIGID, N_STROBE, PARAM, STATE, STATUS
-from .jit import SOLVER_JIT
+from .jit import SOLVER_JIT, njit
 from .models import tip_mass
 
 #: Forward-difference step of the monodromy, relative to each component's scale [-].

@@ -9,9 +9,7 @@ Shared by the rigid stop's finish (lanes.finish_step) and the moving stop's
 
 from __future__ import annotations
 
-from numba import njit
-
-from ..jit import JIT
+from ..jit import JIT, njit
 from . import hermite
 from .layouts import LANE
 

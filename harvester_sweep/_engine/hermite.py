@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from ..jit import JIT
+from ..jit import JIT, njit
 
 
 @njit(inline="always", **JIT)

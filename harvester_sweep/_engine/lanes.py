@@ -19,9 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..jit import JIT
+from ..jit import JIT, njit
 from ..models import hertz
 from ..models.tip_mass import (
     Coefficients,

@@ -15,9 +15,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..jit import JIT
+from ..jit import JIT, njit
 from ..models import tip_mass
 from ..models.tip_mass import free_step_map
 from .layouts import PARAM, STATE

@@ -10,9 +10,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..jit import JIT
+from ..jit import JIT, njit
 from ..models import hertz
 from ..models.tip_mass import Coefficients, derivatives, rk4
 from . import hermite

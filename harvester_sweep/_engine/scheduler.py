@@ -18,9 +18,9 @@ import threading
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
-from ..jit import JIT
+from ..jit import JIT, njit
 from . import lanes
 from .atomic import fetch_add
 from .layouts import (

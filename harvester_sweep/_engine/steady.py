@@ -10,9 +10,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..jit import JIT
+from ..jit import JIT, njit
 from .layouts import ACC, METRIC, PARAM, STATE
 
 MAX_ORBIT_PERIOD = 16  # longest orbit period p looked for, in forcing periods

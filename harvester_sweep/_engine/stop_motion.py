@@ -23,9 +23,8 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from ..jit import JIT
+from ..jit import JIT, njit
 from ..models import hertz
 from ..models.tip_mass import contact_force, in_contact, voltage_rate
 from . import booking, hermite

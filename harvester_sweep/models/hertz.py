@@ -19,9 +19,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from ..jit import JIT
+from ..jit import JIT, njit
 
 #: Kinds of switch, as the engine's switch location reports them.
 TOUCH = 1  # delta = 0: touch or separation

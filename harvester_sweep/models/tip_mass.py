@@ -31,9 +31,8 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from ..jit import JIT, SOLVER_JIT
+from ..jit import JIT, SOLVER_JIT, njit
 from . import hertz
 from .state import Component
 

@@ -31,9 +31,9 @@ import cmath
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
-from ...jit import JIT
+from ...jit import JIT, njit
 from ...models import hertz
 from .. import hermite
 from ..atomic import fetch_add

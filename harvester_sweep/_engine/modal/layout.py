@@ -11,9 +11,7 @@ from __future__ import annotations
 
 from collections import namedtuple
 
-from numba import njit
-
-from ...jit import JIT
+from ...jit import JIT, njit
 
 #: The complex row, in order (a field is D long unless its meaning gives its shape):
 COMPLEX = (
