@@ -21,12 +21,8 @@ import contextlib
 import os
 
 import numba
+from filelock import FileLock
 from numba.core.caching import IndexDataCacheFile
-
-try:
-    import fcntl
-except ImportError:  # (not POSIX: the cache is used as numba leaves it)
-    fcntl = None
 
 FASTMATH = frozenset({"nsz", "arcp", "contract"})
 JIT = dict(cache=True, fastmath=set(FASTMATH), error_model="numpy")
@@ -52,26 +48,28 @@ class _LockedCacheFile(IndexDataCacheFile):
     """
 
     @contextlib.contextmanager
-    def _locked(self, exclusive: bool):
+    def _locked(self):
+        lock = FileLock(os.path.join(self._cache_path, "harvester-sweep-cache.lock"))
         try:
-            handle = open(os.path.join(self._cache_path, "harvester-sweep-cache.lock"), "a")
+            lock.acquire()
         except OSError:  # no folder yet (nothing to read), or one not writable
             yield
             return
-        with handle:
-            fcntl.flock(handle, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
-            yield  # (closing the file releases the lock)
+        try:
+            yield
+        finally:
+            lock.release()
 
     def save(self, key, data):
-        with self._locked(True):
+        with self._locked():
             super().save(key, data)
 
     def load(self, key):
-        with self._locked(False):
+        with self._locked():
             return super().load(key)
 
     def flush(self):
-        with self._locked(True):
+        with self._locked():
             super().flush()
 
 
@@ -80,8 +78,7 @@ def njit(**options):
     def compiled(function):
         dispatcher = numba.njit(**options)(function)
         cache = getattr(dispatcher, "_cache", None)
-        if fcntl is not None and isinstance(getattr(cache, "_cache_file", None),
-                                            IndexDataCacheFile):
+        if isinstance(getattr(cache, "_cache_file", None), IndexDataCacheFile):
             cache._cache_file.__class__ = _LockedCacheFile
         return dispatcher
 
