@@ -33,6 +33,10 @@ JIT = dict(cache=True, fastmath=set(FASTMATH), error_model="numpy")
 SOLVER_JIT = dict(cache=True, error_model="numpy")
 
 
+#: The longest a process waits for the lock on numba's cache folder [s].
+CACHE_LOCK_WAIT = 60.0
+
+
 class _LockedCacheFile(IndexDataCacheFile):
     """numba's cache of one function (an index of signatures and a data file for each),
     read and written under a lock on its folder.
@@ -49,10 +53,13 @@ class _LockedCacheFile(IndexDataCacheFile):
 
     @contextlib.contextmanager
     def _locked(self):
-        lock = FileLock(os.path.join(self._cache_path, "harvester-sweep-cache.lock"))
+        # (another process holds the lock for the milliseconds of a save: a lock not had
+        # in CACHE_LOCK_WAIT, or none to be had in a folder not writable, is gone without)
+        lock = FileLock(os.path.join(self._cache_path, "harvester-sweep-cache.lock"),
+                        timeout=CACHE_LOCK_WAIT)
         try:
             lock.acquire()
-        except OSError:  # no folder yet (nothing to read), or one not writable
+        except OSError:  # (filelock's Timeout is one)
             yield
             return
         try:
