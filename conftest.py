@@ -2,19 +2,21 @@
 the workers first fill numba's on-disk cache between them.
 
 On a cold cache most of a suite's time is numba compiling two machine codes that share
-nothing: the tip-mass model's lane engine with the orbit solver, and the beam's modal
+little: the tip-mass model's lane engine with the orbit solver, and the beam's modal
 engine, each minutes on one core. Each worker compiles its share (worker k the parts
 k, k + workers, ...) before any test, then waits until every part is in the cache, so that
 no test compiles what another worker is compiling; the tests then load them. The cache is
 safe for processes that compile at once (harvester_sweep.jit), so a worker that gives up
 waiting only compiles again. Without xdist nothing is done here: the first test that needs
-an engine compiles it.
+an engine compiles it. (With xdist, a run of a few tests compiles both engines first, when
+the cache is cold.)
 """
 
 from __future__ import annotations
 
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 #: The longest a worker waits for the others' parts [s] (a part takes minutes cold).
@@ -50,7 +52,9 @@ def pytest_sessionstart(session):
     for k in range(index, len(PARTS), count):
         try:
             PARTS[k]()
-        finally:  # (a part that failed fails again in the tests that need it)
+        except Exception as error:  # (it fails again, and is reported, in the tests that need it)
+            warnings.warn(f"compiling {PARTS[k].__name__} before the tests failed: {error!r}")
+        finally:
             (shared / str(k)).touch()
     deadline = time.monotonic() + WAIT
     while (not all((shared / str(k)).exists() for k in range(len(PARTS)))
