@@ -50,12 +50,17 @@ def test_the_estimate_grows_with_the_points_and_shrinks_with_the_threads():
     assert estimate(spec, 0, 1).seconds == 0.0
 
 
-def test_a_continued_line_costs_its_points_one_after_another():
+def test_a_continued_line_costs_its_points_one_after_another(monkeypatch):
     # A swept line's points wait for each other: a line twice as long takes longer, and
-    # a second direction adds its line's steps.
+    # a second direction adds its line's steps. (The two lines' times on one measured
+    # sample, the short line's: each sweep's own, measured apart, differ by this machine's
+    # load, and under pytest-xdist by the other worker's.)
     short, long = (load_sweep(_line(["up"], num=n)) for n in (24, 48))
-    assert estimate(long, long.n_points, 2).seconds > estimate(short, short.n_points,
-                                                               2).seconds
+    sample = run_estimate._sweep_sample(short)
+    with monkeypatch.context() as patched:
+        patched.setattr(run_estimate, "_sweep_sample", lambda spec: sample)
+        assert estimate(long, long.n_points, 2).seconds > estimate(short, short.n_points,
+                                                                   2).seconds
     both = load_sweep(_line(["up", "down"], num=24))
     assert estimate(both, both.n_points, 2).steps > estimate(short, short.n_points, 2).steps
 
