@@ -24,12 +24,11 @@ WAIT = 1800.0
 
 
 def _tip_mass() -> None:
-    """The lane engine, the orbit solver, and a scene's record of its orbit."""
-    from harvester_sweep import orbits, period_map, run_scene
+    """The lane engine and the orbit solver (a scene's solve compiles both, as a sweep's
+    does), and the record of the scene's orbit."""
+    from harvester_sweep import run_scene
 
-    period_map.compile_engine()
-    orbits.compile_solver()
-    run_scene(steps_per_period=256, max_periods=40)
+    run_scene(steps_per_period=256, max_periods=40).series(periods=1)
 
 
 def _beam() -> None:

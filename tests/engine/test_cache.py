@@ -13,7 +13,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 ROOT = Path(__file__).parents[2]  # subprocesses import this checkout
@@ -81,7 +80,7 @@ def _env(tmp_path):
 
 
 def test_two_processes_compiling_at_once_each_leave_their_own_machine_code(tmp_path):
-    (tmp_path / "racing.py").write_text(textwrap.dedent(MODULE))
+    (tmp_path / "racing.py").write_text(MODULE)
     flags = tmp_path / "flags"
     flags.mkdir()
     env = _env(tmp_path)
