@@ -43,7 +43,7 @@ STEPS_PER_SECOND = 1e8
 TYPICAL_PERIODS = 150
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class TimeScales:
     """Rates of one point. [rad/s] for oscillations, [1/s] for decays."""
 
@@ -84,34 +84,56 @@ class TimeScales:
 #: Parameters chosen from the time scales, which they do not depend on: left out of the
 #: key under which what is derived from them is remembered.
 CHOSEN = frozenset({"steps_per_period", "max_periods"})
-_READERS: dict = {}  # a parameter set's names -> what reads the key's values from it
+#: Left out of that key too: the gap, which it holds as what the gap does (_gap_effect),
+#: so that the points of a grid that differ in their gap alone share their time scales.
+_KEYLESS = CHOSEN | {"gap"}
+#: Keys remembered by each derivation: more than a grid's combinations of the other axes
+#: than the gap usually are (the 1e6-point example has 40,000), so that each is derived
+#: once, not once a gap.
+REMEMBERED = 65536
+_READERS: dict = {}  # a parameter set's names -> (those names, what reads the key's values)
 
 
 def _key(p: dict) -> tuple:
     """The key under which what is derived from parameter set ``p`` is remembered: its
-    names, and its values but those CHOSEN."""
+    names, its values but the gap and those CHOSEN, and what the gap does."""
     names = tuple(p)
-    read = _READERS.get(names)
-    if read is None:
-        read = _READERS[names] = operator.itemgetter(*(n for n in names if n not in CHOSEN))
-    return names, read(p)
+    known = _READERS.get(names)
+    if known is None:
+        known = _READERS[names] = (
+            names, operator.itemgetter(*(n for n in names if n not in _KEYLESS)))
+    return known[0], known[1](p), _gap_effect(p)
+
+
+def _gap_effect(p: dict):
+    """All the gap [m] of ``p`` does to its time scales: below 0, the gap itself (the stop
+    is pressed in by it); else whether the stop is within the motion's reach (_contact)."""
+    gap = p["gap"]
+    if gap < 0:
+        return gap
+    return _in_reach(gap, _velocity(p), _slower(p))
 
 
 def _remembered(derive):
     """``derive(p)`` remembered under _key(p): a point is resolved (its step chosen), then
-    packed (its step checked against that choice), each asking, and a chunk of a sweep
-    holds 4096 points. Derived afresh where a value is unhashable."""
-    @functools.lru_cache(maxsize=8192)
-    def by_key(key):
-        names, values = key
-        return derive(dict(zip([name for name in names if name not in CHOSEN], values)))
+    packed (its step checked against that choice), each asking, and a sweep's points that
+    differ in their gap alone derive the same. Derived afresh where a value is
+    unhashable. At most REMEMBERED keys (then forgotten all at once: what is derived does
+    not depend on what is remembered)."""
+    known: dict = {}
 
     @functools.wraps(derive)
     def remembered(p):
         try:
-            return by_key(_key(p))
+            key = _key(p)
+            found = known.get(key)
         except TypeError:  # an unhashable value
             return derive(p)
+        if found is None:
+            if len(known) >= REMEMBERED:
+                known.clear()
+            found = known[key] = derive({n: v for n, v in p.items() if n not in CHOSEN})
+        return found
 
     return remembered
 
@@ -121,11 +143,11 @@ def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
     wn = 2 * math.pi * p["natural_frequency"]
     w = 2 * math.pi * p["frequency"]
-    v = _free_velocity(*(p[name] for name in _LINEAR))
+    v = _velocity(p)
     contact = damping = delta = 0.0
     for stop in (p, lower_stop(p)):  # the faster of the stops in reach
         if stop is not None:
-            c, d, dl = _contact(stop, v, min(w, wn))
+            c, d, dl = _contact(stop, v, _slower(p))
             contact, damping, delta = max(contact, c), max(damping, d), max(delta, dl)
     support = support_damping = 0.0
     if p["stop_support_stiffness"] is not None:
@@ -138,6 +160,23 @@ def time_scales(p: dict) -> TimeScales:
 #: The parameters the stop-free velocity estimate reads.
 _LINEAR = ("mass", "natural_frequency", "damping_ratio", "coupling", "capacitance",
            "resistance", "amplitude", "frequency", "base_forcing_factor")
+
+
+def _velocity(p: dict) -> float:
+    """The stop-free velocity estimate [m/s] of parameter set ``p`` (_free_velocity)."""
+    return _free_velocity(*(p[name] for name in _LINEAR))
+
+
+def _slower(p: dict) -> float:
+    """The lower of the forcing's and the natural angular frequency [rad/s]: the one the
+    estimated velocity reaches the farthest at."""
+    return min(2 * math.pi * p["frequency"], 2 * math.pi * p["natural_frequency"])
+
+
+def _in_reach(gap: float, v: float, omega: float) -> bool:
+    """Whether a stop ``gap`` [m] away is within reach of a motion of velocity amplitude
+    ``v`` [m/s] at ``omega`` [rad/s]: within twice the displacement v / omega."""
+    return gap < 2.0 * v / omega
 
 
 @functools.lru_cache(maxsize=65536)  # (a grid's other axes repeat these: the gap's, say)
@@ -175,7 +214,7 @@ def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     if p["stop_support_stiffness"] is not None:  # tip and stop pushed apart: reduced mass
         m = m * p["stop_mass"] / (m + p["stop_mass"])
     # The stop only takes energy out: the motion stays within the linear resonance amplitude.
-    if not (kh > 0 and p["gap"] < 2.0 * v / omega):
+    if not (kh > 0 and _in_reach(p["gap"], v, omega)):
         return 0.0, 0.0, 0.0
     ch = contact_damping_of(p, v)
     energy = 0.5 * m * v * v

@@ -119,3 +119,26 @@ def test_a_replaced_preset_is_checked_again(monkeypatch):
         resolve_parameters("paper")
     monkeypatch.setitem(PRESETS, "mine", {**PRESETS["strong_coupling"], "mass": 2e-3})
     assert resolve_parameters("mine", gap=2e-6)["mass"] == 2e-3
+
+
+@settings(max_examples=60, deadline=None)
+@given(gaps=st.lists(st.sampled_from([-3e-6, -1e-7, 0.0, 1e-7, 2e-6, 4e-5, 3e-4, 1e-3, 1.0]),
+                     min_size=2, max_size=4),
+       frequency=st.sampled_from([60.0, 140.0, 150.0, 400.0]),
+       stops=st.sampled_from([{}, {"lower_gap": 2e-6}, {"impact_velocity_mode": "latched"},
+                              {"stop_support_stiffness": 2e4, "stop_mass": 1e-3,
+                               "stop_support_damping": 0.05}]))
+def test_what_is_remembered_across_gaps_is_what_each_gap_derives(gaps, frequency, stops):
+    """Points that differ in their gap alone share their remembered time scales where the
+    gap does the same to them (timescales._gap_effect): each point's time scales, step
+    and budget are those derived afresh for its own gap, whichever gaps came before."""
+    from harvester_sweep import timescales
+
+    for gap in gaps:
+        try:
+            p = resolve_parameters("paper", gap=gap, frequency=frequency, **stops)
+        except ParameterError:  # (a lower stop beside a preloaded upper one)
+            continue
+        for derive in (timescales.time_scales, timescales.auto_steps_per_period,
+                       timescales.auto_max_periods, timescales.stability_steps):
+            assert derive(p) == derive.__wrapped__(p), (derive.__name__, gap)
