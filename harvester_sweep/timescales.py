@@ -87,9 +87,9 @@ CHOSEN = frozenset({"steps_per_period", "max_periods"})
 #: Left out of that key too: the gap, which it holds as what the gap does (_gap_effect),
 #: so that the points of a grid that differ in their gap alone share their time scales.
 _KEYLESS = CHOSEN | {"gap"}
-#: Keys remembered by each derivation: more than a grid's combinations of the other axes
-#: than the gap usually are (the 1e6-point example has 40,000), so that each is derived
-#: once, not once a gap.
+#: The most keys each derivation remembers: more than the combinations of a grid's axes
+#: other than the gap usually number (examples/million_points.toml has 80 x 10 x 50), so
+#: that each is derived once, not once per gap.
 REMEMBERED = 65536
 _READERS: dict = {}  # a parameter set's names -> (those names, what reads the key's values)
 
