@@ -19,7 +19,7 @@ from __future__ import annotations
 import functools
 import math
 import operator
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -43,9 +43,9 @@ STEPS_PER_SECOND = 1e8
 TYPICAL_PERIODS = 150
 
 
-@dataclass(frozen=True, slots=True)
-class TimeScales:
-    """Rates of one point. [rad/s] for oscillations, [1/s] for decays."""
+class TimeScales(NamedTuple):
+    """Rates of one point. [rad/s] for oscillations, [1/s] for decays. (A tuple of numbers,
+    which Python's garbage collector stops tracking: a sweep remembers tens of thousands.)"""
 
     forcing: float
     natural: float
@@ -84,8 +84,9 @@ class TimeScales:
 #: Parameters chosen from the time scales, which they do not depend on: left out of the
 #: key under which what is derived from them is remembered.
 CHOSEN = frozenset({"steps_per_period", "max_periods"})
-#: Left out of that key too: the gap, which it holds as what the gap does (_gap_effect),
-#: so that the points of a grid that differ in their gap alone share their time scales.
+#: Left out of that key too: the gap, which enters what is derived here only as a preload
+#: (below 0) or as whether the stop is in reach (_contact): the points of a grid that
+#: differ in their gap alone share the derivations where it does the same to them.
 _KEYLESS = CHOSEN | {"gap"}
 #: The most keys each derivation remembers: more than the combinations of a grid's axes
 #: other than the gap usually number (examples/million_points.toml has 80 x 10 x 50), so
@@ -96,43 +97,43 @@ _READERS: dict = {}  # a parameter set's names -> (those names, what reads the k
 
 def _key(p: dict) -> tuple:
     """The key under which what is derived from parameter set ``p`` is remembered: its
-    names, its values but the gap and those CHOSEN, and what the gap does."""
+    names, and its values but the gap and those CHOSEN."""
     names = tuple(p)
     known = _READERS.get(names)
     if known is None:
         known = _READERS[names] = (
             names, operator.itemgetter(*(n for n in names if n not in _KEYLESS)))
-    return known[0], known[1](p), _gap_effect(p)
-
-
-def _gap_effect(p: dict):
-    """All the gap [m] of ``p`` does to its time scales: below 0, the gap itself (the stop
-    is pressed in by it); else whether the stop is within the motion's reach (_contact)."""
-    gap = p["gap"]
-    if gap < 0:
-        return gap
-    return _in_reach(gap, _velocity(p), _slower(p))
+    return known[0], known[1](p)
 
 
 def _remembered(derive):
-    """``derive(p)`` remembered under _key(p): a point is resolved (its step chosen), then
-    packed (its step checked against that choice), each asking, and a sweep's points that
-    differ in their gap alone derive the same. Derived afresh where a value is
-    unhashable. At most REMEMBERED keys (then forgotten all at once: what is derived does
-    not depend on what is remembered)."""
-    known: dict = {}
+    """``derive(p)`` remembered under _key(p) and what the gap does: below 0 the gap
+    itself, else whether the stop is within the motion's reach, a distance that the key
+    fixes (_reach). A point is resolved (its step chosen), then packed (its step checked
+    against that choice), each asking, and a sweep's points that differ in their gap
+    alone ask the same. Derived afresh where a value is unhashable. At most REMEMBERED
+    keys (then forgotten all at once: what is derived does not depend on what is
+    remembered)."""
+    reaches: dict = {}  # key -> the stop's reach [m]
+    known: dict = {}  # (key, what the gap does) -> what is derived
 
     @functools.wraps(derive)
     def remembered(p):
         try:
             key = _key(p)
-            found = known.get(key)
+            reach = reaches.get(key)
         except TypeError:  # an unhashable value
             return derive(p)
-        if found is None:
-            if len(known) >= REMEMBERED:
+        if reach is None:
+            if len(reaches) >= REMEMBERED:
+                reaches.clear()
                 known.clear()
-            found = known[key] = derive({n: v for n, v in p.items() if n not in CHOSEN})
+            reach = reaches[key] = _reach(_velocity(p), _slower(p))
+        gap = p["gap"]
+        which = key, gap if gap < 0 else gap < reach
+        found = known.get(which)
+        if found is None:
+            found = known[which] = derive(p)
         return found
 
     return remembered
@@ -162,9 +163,12 @@ _LINEAR = ("mass", "natural_frequency", "damping_ratio", "coupling", "capacitanc
            "resistance", "amplitude", "frequency", "base_forcing_factor")
 
 
+_LINEAR_OF = operator.itemgetter(*_LINEAR)
+
+
 def _velocity(p: dict) -> float:
     """The stop-free velocity estimate [m/s] of parameter set ``p`` (_free_velocity)."""
-    return _free_velocity(*(p[name] for name in _LINEAR))
+    return _free_velocity(*_LINEAR_OF(p))
 
 
 def _slower(p: dict) -> float:
@@ -173,10 +177,10 @@ def _slower(p: dict) -> float:
     return min(2 * math.pi * p["frequency"], 2 * math.pi * p["natural_frequency"])
 
 
-def _in_reach(gap: float, v: float, omega: float) -> bool:
-    """Whether a stop ``gap`` [m] away is within reach of a motion of velocity amplitude
-    ``v`` [m/s] at ``omega`` [rad/s]: within twice the displacement v / omega."""
-    return gap < 2.0 * v / omega
+def _reach(v: float, omega: float) -> float:
+    """The distance [m] within which a stop is in reach of a motion of velocity amplitude
+    ``v`` [m/s] at ``omega`` [rad/s]: twice the displacement v / omega."""
+    return 2.0 * v / omega
 
 
 @functools.lru_cache(maxsize=65536)  # (a grid's other axes repeat these: the gap's, say)
@@ -214,7 +218,7 @@ def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     if p["stop_support_stiffness"] is not None:  # tip and stop pushed apart: reduced mass
         m = m * p["stop_mass"] / (m + p["stop_mass"])
     # The stop only takes energy out: the motion stays within the linear resonance amplitude.
-    if not (kh > 0 and _in_reach(p["gap"], v, omega)):
+    if not (kh > 0 and p["gap"] < _reach(v, omega)):
         return 0.0, 0.0, 0.0
     ch = contact_damping_of(p, v)
     energy = 0.5 * m * v * v

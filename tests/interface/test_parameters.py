@@ -130,7 +130,7 @@ def test_a_replaced_preset_is_checked_again(monkeypatch):
                                "stop_support_damping": 0.05}]))
 def test_what_is_remembered_across_gaps_is_what_each_gap_derives(gaps, frequency, stops):
     """Points that differ in their gap alone share their remembered time scales where the
-    gap does the same to them (timescales._gap_effect): each point's time scales, step
+    gap does the same to them (timescales._remembered): each point's time scales, step
     and budget are those derived afresh for its own gap, whichever gaps came before."""
     from harvester_sweep import timescales
 
@@ -139,6 +139,10 @@ def test_what_is_remembered_across_gaps_is_what_each_gap_derives(gaps, frequency
             p = resolve_parameters("paper", gap=gap, frequency=frequency, **stops)
         except ParameterError:  # (a lower stop beside a preloaded upper one)
             continue
+        # (and not on the step and budget chosen from them, which the key leaves out)
+        chosen = {**p, "steps_per_period": 2 * p["steps_per_period"],
+                  "max_periods": 3 * p["max_periods"]}
         for derive in (timescales.time_scales, timescales.auto_steps_per_period,
                        timescales.auto_max_periods, timescales.stability_steps):
-            assert derive(p) == derive.__wrapped__(p), (derive.__name__, gap)
+            assert derive(p) == derive.__wrapped__(p) == derive.__wrapped__(chosen), (
+                derive.__name__, gap)
