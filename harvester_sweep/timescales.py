@@ -144,11 +144,11 @@ def time_scales(p: dict) -> TimeScales:
     """Time scales of a validated parameter set (SI units)."""
     wn = 2 * math.pi * p["natural_frequency"]
     w = 2 * math.pi * p["frequency"]
-    v = _velocity(p)
+    v, omega = _velocity(p), _slower(p)
     contact = damping = delta = 0.0
     for stop in (p, lower_stop(p)):  # the faster of the stops in reach
         if stop is not None:
-            c, d, dl = _contact(stop, v, _slower(p))
+            c, d, dl = _contact(stop, v, omega)
             contact, damping, delta = max(contact, c), max(damping, d), max(delta, dl)
     support = support_damping = 0.0
     if p["stop_support_stiffness"] is not None:
