@@ -220,14 +220,15 @@ class _Group:
         return out
 
     def jacobians(self, packs, which, states, periods):
-        """The monodromy of P^p at each state by forward differences (D + 1 runs)."""
-        steps = np.array([PERTURBATION * self.scale[k] for k in which])
-        return modal_map.monodromies(packs, states, periods, steps)
+        """The monodromy of P^p at each state by the variational equations, carried along
+        one run of each (modal_map.variational_monodromies): Newton's, for its steps
+        alone."""
+        return modal_map.variational_monodromies(packs, states, periods)
 
     def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON,
                touched=None, retry=None) -> Newton:
         """Fixed points of P^p from ``states`` (len(which), D): full Newton with
-        finite-difference monodromies (the last one reused by an iterate within
+        monodromies by the variational equations (the last one reused by an iterate within
         PERTURBATION of where it was taken), or chord steps with ``jac`` where given.
         Attempts from the motion's states (``touched``: whether each motion touches a
         stop) end at their first run where a motion that touches is not in a stable
@@ -251,10 +252,10 @@ class _Group:
             idx = np.flatnonzero(live & ~conv)
             if not len(idx):
                 break
-            # full Newton takes the monodromy again, by copies, unless the iterate moved
-            # less than the copies' own perturbation from where it was taken: it then
-            # changed by less than the forward differences' own error (as the tip-mass
-            # solver's CHORD), and the iterate runs alone
+            # full Newton takes the monodromy again (by the variational equations, along
+            # the iterate's run) unless the iterate moved less than PERTURBATION from
+            # where it was taken: it then changed by less than its own error (as the
+            # tip-mass solver's CHORD), and the iterate runs alone, at a run's cost
             fresh = (moved[idx] > PERTURBATION) if jac is None else np.zeros(len(idx), bool)
             image, ok = np.empty((len(idx), D)), np.empty(len(idx), dtype=bool)
             copied, alone = idx[fresh], idx[~fresh]

@@ -195,14 +195,39 @@ def map_states(packs, states, periods) -> tuple:
     """The period map: each state (n, D) at phase 0 after ``periods`` (n,) forcing periods
     of its point (``packs``, one model's dimensions). Returns (end states (n, D), ok (n,):
     False where the run diverged)."""
+    D = packs[0].dims[0]
+    ends, ok, _ = _map(packs, states, periods, np.empty((len(packs), 0, D), complex))
+    return ends, ok
+
+
+def variational_monodromies(packs, states, periods) -> tuple:
+    """The Jacobian of the period map P^p at each state by its variational equations,
+    carried along one run of each point (map_states' arguments): exact clear of the
+    surfaces, the contact sub-steps' own RK4 inside them. It is the derivative of the
+    flow the engine integrates, the sub-steps' lengths held: it differs from the
+    derivative of the engine's map by about the map's own error. Returns (the Jacobians
+    (n, D, D), the images P^p(state) (n, D), ok (n,): False where the run diverged or a
+    Jacobian is not finite)."""
+    # (the tangents start as the changes of z of a unit change of each component of y:
+    # the rows of W^-1's transpose; they end as the changes of z that y's bring)
+    tangents = np.array([pk.inverse.T for pk in packs], dtype=complex)
+    ends, ok, tangents = _map(packs, states, periods, tangents)
+    jac = np.array([(pk.basis @ t.T).real for pk, t in zip(packs, tangents)])
+    return jac, ends, ok & np.isfinite(jac).all(axis=(1, 2))
+
+
+def _map(packs, states, periods, tangents) -> tuple:
+    """map_states, with ``tangents`` (n, m, D) (changes of z) carried along; returns
+    (end states, ok, tangents)."""
     D, S, K = packs[0].dims
     z = np.array([pk.to_modal(y) for pk, y in zip(packs, states)], dtype=complex)
     ok = np.empty(len(packs), dtype=bool)
     rrows = np.array([pk.rrow for pk in packs])
     periods = np.asarray(periods, dtype=np.int64)
-    modal.map_points(np.array([pk.crow for pk in packs]), rrows, z, periods, ok,
+    tangents = np.ascontiguousarray(tangents, dtype=complex)
+    modal.map_points(np.array([pk.crow for pk in packs]), rrows, z, periods, tangents, ok,
                      _threads(rrows, periods, D), D, S, K)
-    return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok
+    return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok, tangents
 
 
 def monodromies(packs, states, periods, steps, central=False) -> tuple:

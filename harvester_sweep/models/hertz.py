@@ -37,6 +37,17 @@ def force(kh, delta, rate, ch):
 
 
 @njit(inline="always", **JIT)
+def slopes(kh, delta, rate, ch):
+    """The derivatives of :func:`force` by ``delta`` [N/m] and by ``rate`` [N s/m] (per
+    unit mass for ``kh`` = k_h / m), 0 where the force is off: what the variational
+    equations of a motion in contact take."""
+    d = max(delta, 0.0)
+    c = max(1.0 + ch * rate, 0.0)
+    root = math.sqrt(d)
+    return 1.5 * kh * root * c, (kh * d * root * ch if c > 0.0 else 0.0)
+
+
+@njit(inline="always", **JIT)
 def clip(rate, ch):
     """1 + c_h r [-]: the clip's surface, positive where the stop can push."""
     return 1.0 + ch * rate

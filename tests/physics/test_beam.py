@@ -74,6 +74,36 @@ def test_the_contact_free_map_and_its_reach_are_the_linear_systems():
     assert pack.reach(orbit)[0] == pytest.approx(np.abs(motion(orbit, 1)).max(), rel=1e-5)
 
 
+def test_newtons_monodromy_is_the_period_maps_derivative():
+    """Newton's monodromy by the variational equations (modal_map.variational_monodromies):
+    clear of the stop it is SciPy's expm of the linear system over the periods; on an
+    orbit with contact it is the derivative that central differences take of the engine's
+    own map, to a difference that falls as the contact step does (the variational
+    equations hold the sub-steps' lengths, which the map moves with the touch)."""
+    free = resolve_beam_parameters(n_modes=3, frequency=150.0, gap=1e-2)
+    bs = system_of(free)
+    pack = pack_beam(free, bs, *first_steps(free, bs))
+    y = pack.particular.imag + 3.0 * bs.scale  # (off the orbit: the map is affine)
+    J, _, ok = modal_map.variational_monodromies([pack], y[None], [2])
+    expm = scipy.linalg.expm(bs.system.matrix * 2.0 / free["frequency"])
+    assert ok[0] and np.abs(J[0] - expm).max() <= 1e-9 * np.abs(expm).max()
+    p = resolve_beam_parameters(n_modes=1, frequency=230.0, gap=1e-6)
+    solved = solve_beam([p])
+    assert solved.values["impacts_per_period"][0] == 1
+    y, bs = solved.ends[0], system_of(p)
+    steps, sub = first_steps(p, bs)
+    s = bs.scale[:, None] / bs.scale[None, :]  # (the monodromy in units of the scales)
+    apart = []
+    for level in (0, 2):
+        pk = pack_beam(p, bs, steps * 2 ** level, sub / 2 ** level)
+        J, _, ok = modal_map.variational_monodromies([pk], y[None], [1])
+        C, _, ok_c = modal_map.monodromies([pk], y[None], [1], (1e-6 * bs.scale)[None],
+                                           central=True)
+        assert ok[0] and ok_c[0]
+        apart.append(np.abs((J[0] - C[0]) / s).max() / np.abs(C[0] / s).max())
+    assert apart[0] < 5e-3 and apart[1] < apart[0] / 3
+
+
 def test_one_mode_at_the_tip_is_the_tip_mass_model():
     """The one-mode beam striking at its tip is the tip-mass model with the reduced
     parameters (m_eq, k_eq, theta_eq, mu_1): the same linear system in x = phi_1(L) eta_1
@@ -308,8 +338,8 @@ def test_a_mode_decayed_clear_of_the_stops_is_zero_not_subnormal():
     T = 2 * np.pi / pk.rrow[modal_map.RealFields(*modal_map.real_fields(D, S, K)).omega]
     passed = np.zeros(D, dtype=bool)  # components whose exact flow went below TINY
     for n in range(1, 121):
-        modal_map.modal.map_points(pk.crow[None], pk.rrow[None], z, np.array([1]), ok, 1,
-                                   D, S, K)
+        modal_map.modal.map_points(pk.crow[None], pk.rrow[None], z, np.array([1]),
+                                   np.empty((1, 0, D), complex), ok, 1, D, S, K)
         assert ok[0]
         parts = np.concatenate([z[0].real, z[0].imag])
         assert ((parts == 0.0) | (np.abs(parts) >= tiny)).all(), f"subnormal at period {n}"

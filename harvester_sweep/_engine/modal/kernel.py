@@ -393,6 +393,71 @@ def _lawson(z, t, tau, e1, eh, out, omega, pen, pl, pen_p, inp, gap, kh, ch, F, 
 
 
 @njit(**JIT)
+def _carry(lam, tan, tau, D):
+    """The tangents ``tan`` (rows, each (D,)) carried along tau [s] of the exact
+    contact-free flow: exp(lam tau) each component."""
+    if tau != 0.0:
+        for k in range(D):
+            e = cmath.exp(lam[k] * tau)
+            for c in range(tan.shape[0]):
+                tan[c, k] *= e
+
+
+@njit(inline="always", **JIT)
+def _slopes(w, t, omega, pen, pl, pen_p, gap, kh, ch, sd, sr, D, S):
+    """Each surface's dF/d delta [N/m] into sd and dF/d rate [N s/m] into sr at (w, t)."""
+    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    for s in range(S):
+        d = _dot_re(pen, s, w, D) + _phasor(pen_p[s], sn, cs) - gap[s]
+        r = _dot_re(pl, s, w, D) + omega * _phasor(pen_p[s], cs, -sn)
+        sd[s], sr[s] = hertz.slopes(kh[s], d, r, ch[s])
+
+
+@njit(inline="always", **JIT)
+def _pushed(sd, sr, pen, pl, inp, v, g, D, S):
+    """g (D,) = sum_s inp_s dF_s: how the forces' change along the tangent v (D,) drives
+    z, dF_s = sd_s Re(pen_s v) + sr_s Re(pl_s v)."""
+    for k in range(D):
+        g[k] = 0j
+    for s in range(S):
+        if sd[s] != 0.0 or sr[s] != 0.0:
+            df = sd[s] * _dot_re(pen, s, v, D) + sr[s] * _dot_re(pl, s, v, D)
+            for k in range(D):
+                g[k] += inp[s, k] * df
+
+
+@njit(**JIT)
+def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, omega, pen, pl, pen_p, inp, gap,
+                     kh, ch, slope, vec, D, S):
+    """The tangents ``tan`` (rows) carried along _lawson's step of length tau [s] from z at
+    t, whose stages it left in w2, w3, w4 (e1, eh: exp(lam tau), exp(lam tau / 2)): the
+    same RK4 on the variational equations, so that the tangents are the derivative of
+    the step with its lengths held. ``slope`` (8, S) and ``vec`` (4, D) are room."""
+    hh, h6 = 0.5 * tau, tau / 6.0
+    _slopes(z, t, omega, pen, pl, pen_p, gap, kh, ch, slope[0], slope[1], D, S)
+    _slopes(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[2], slope[3], D, S)
+    _slopes(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[4], slope[5], D, S)
+    _slopes(w4, t + tau, omega, pen, pl, pen_p, gap, kh, ch, slope[6], slope[7], D, S)
+    g, u, g2, o = vec[0], vec[1], vec[2], vec[3]
+    for c in range(tan.shape[0]):
+        v = tan[c]
+        _pushed(slope[0], slope[1], pen, pl, inp, v, g, D, S)
+        for k in range(D):
+            u[k] = eh[k] * (v[k] + hh * g[k])
+            o[k] = e1[k] * (v[k] + h6 * g[k])
+        _pushed(slope[2], slope[3], pen, pl, inp, u, g2, D, S)
+        for k in range(D):
+            u[k] = eh[k] * v[k] + hh * g2[k]
+        _pushed(slope[4], slope[5], pen, pl, inp, u, g, D, S)
+        for k in range(D):
+            u[k] = e1[k] * v[k] + tau * eh[k] * g[k]
+            o[k] += 2.0 * h6 * eh[k] * (g2[k] + g[k])
+        _pushed(slope[6], slope[7], pen, pl, inp, u, g, D, S)
+        for k in range(D):
+            v[k] = o[k] + h6 * g[k]
+
+
+@njit(**JIT)
 def _lag(y, ring, n, p, scale, D):
     """The largest difference between strobe y (period n) and the strobe p periods before
     it in the ring, in units of each component's scale."""
@@ -456,7 +521,7 @@ def _sample(z, t, t_abs, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega, 
 @njit(**JIT)
 def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, grid, pen, pl, pl2,
              pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f, volt, strobe, y_p,
-             scale, settle, limit, ring, acc, D, S, K):
+             scale, settle, limit, ring, acc, tan, D, S, K):
     """Run ``periods`` forcing periods from z (modified) in the contact state ``st`` =
     (mode, surface, grade, periods run before) (modified), at ``steps`` grid steps per
     period T [s].
@@ -464,7 +529,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     ``settle`` > 0: stop at the first period whose strobe repeats one of the last
     MAX_ORBIT within ``settle`` times each component's scale. ``book``: accumulate into
     ``acc`` (the head's sums, then K maxima, K minima). ``nrec`` >= 0: record each sample
-    into ``rec`` (time, forces, outputs) from row nrec on. Returns (orbit period p, 0 for
+    into ``rec`` (time, forces, outputs) from row nrec on. ``tan`` (n, D): tangents (each
+    row a change of z) carried along (modified; n = 0: none): the variational equations,
+    exact clear of the stops (one product per component and tangent for each stretch
+    between contacts) and the sub-steps' RK4 inside them. Returns (orbit period p, 0 for
     none; status; periods run; rows recorded)."""
     h = T / steps
     F = np.zeros(S)
@@ -474,6 +542,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                   np.empty(D, np.complex128))
     e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
     stages = np.empty((3, S))
+    tangents = tan.shape[0] > 0
+    slope, vec = np.empty((8, S)), np.empty((4, D), np.complex128)
+    t_tan = 0.0  # the time in the period the tangents have been carried to [s]
     # the bound on a surface's rise above its chord over a grid step, taken once per
     # contact-free stretch (|z_k| only decays along it): where it cannot rule out a touch,
     # the step is searched in pieces (_hidden)
@@ -606,11 +677,15 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     t, j, on_grid = target, jn, True
                     sample = True
             else:  # ---- in contact: RK4 sub-steps in the frame of the flow
+                if tangents:
+                    _carry(lam, tan, t - t_tan, D)
+                    t_tan = t
                 tau = substep * 0.5 ** (GRADES - grade)
                 # shrinking towards the predicted separation (APPROACH)
                 cut = max(APPROACH * near, substep * 0.5 ** GRADES)
                 last = t + min(tau, cut) >= T * (1.0 - 1e-14)
-                if last or cut < tau:
+                cut_here = last or cut < tau
+                if cut_here:
                     tau = T - t if last else cut
                     _exps(lam, tau, e1, eh, D)
                     _lawson(z, t, tau, e1, eh, zn, omega, pen, pl, pen_p, inp, gap, kh, ch, F,
@@ -629,6 +704,11 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     break
                 c1 = hertz.clip(r1, ch[act])
                 if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
+                    if tangents:
+                        _lawson_tangents(z, w2, w3, w4, t, tau, e1 if cut_here else sub1[grade],
+                                         eh if cut_here else subh[grade], tan, omega, pen, pl,
+                                         pen_p, inp, gap, kh, ch, slope, vec, D, S)
+                        t_tan = t + tau
                     z[:] = zn
                     t += tau
                     grade = min(grade + 1, GRADES)
@@ -666,6 +746,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     if not math.isfinite(fs):
                         blown = True
                         break
+                    if tangents:  # (along the last sub-step the secant steps computed)
+                        _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, omega, pen, pl,
+                                         pen_p, inp, gap, kh, ch, slope, vec, D, S)
+                        t_tan = t + ts
                     z[:] = zn
                     t += ts
                     last = False
@@ -681,6 +765,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
             if t >= T:
                 break
         # ---- the period's end: its strobe (the next period's samples start from it)
+        if tangents:
+            _carry(lam, tan, T - t_tan, D)
+            t_tan = 0.0
         prev[0] = 0.0
         run += 1
         if blown:
@@ -776,7 +863,7 @@ def run_point(c, r, z, metrics, ring, D, S, K):
     p, status, run, _ = _advance(z, st, max_periods, False, rec, -1, omega, T, steps, substep,
                                  lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out,
                                  outl, out_p, out_f, int(r[7]), strobe, y_p, scale, settle,
-                                 limit, buf, acc, D, S, K)
+                                 limit, buf, acc, np.empty((0, D), np.complex128), D, S, K)
     if status == SETTLED and p == 0:
         status = NOT_SETTLED
     _measure(tables, r, z, st, max(p, 1), status, metrics, buf, D, S, K)
@@ -803,7 +890,8 @@ def _measure(tables, r, z, st, periods, status, metrics, buf, D, S, K):
         _, status2, _, _ = _advance(z, st, periods, True, np.empty((0, 1)), -1, omega, T,
                                     steps, substep, lam, grid, pen, pl, pl2, pen_p, pab, inp,
                                     gap, kh, ch, out, outl, out_p, out_f, int(r[7]), strobe,
-                                    y_p, scale, 0.0, limit, buf, acc, D, S, K)
+                                    y_p, scale, 0.0, limit, buf, acc,
+                                    np.empty((0, D), np.complex128), D, S, K)
         if status2 == DIVERGED:
             status = DIVERGED
     metrics[:] = acc
@@ -880,28 +968,30 @@ def record_samples(c, r, z, periods, rec, D, S, K):
     buf = np.zeros((SAMPLES, D))
     _, _, _, n = _advance(z, st, periods, False, rec, 0, omega, T, steps, substep, lam, grid,
                           pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
-                          volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
+                          volt, strobe, y_p, scale, 0.0, limit, buf, acc,
+                          np.empty((0, D), np.complex128), D, S, K)
     return n
 
 
 @njit(parallel=True, **JIT)
-def map_points(crows, rrows, z, periods, ok, threads, D, S, K):
+def map_points(crows, rrows, z, periods, tangents, ok, threads, D, S, K):
     """The period map: every point (rows as settle_points) from z (n, D), replaced by its
-    state after periods[i] forcing periods on ``threads`` threads; ok[i] is False where
-    the run diverged."""
+    state after periods[i] forcing periods on ``threads`` threads, with the tangents
+    ``tangents[i]`` (rows, each a change of z; (n, 0, D): none) carried along (replaced:
+    the map's derivative applied to them); ok[i] is False where the run diverged."""
     n = crows.shape[0]
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(threads):  # (points taken as settle_points does)
         i = fetch_add(taken, 0)
         while i < n:
-            ok[i] = _map_point(crows[i], rrows[i], z[i], periods[i], D, S, K)
+            ok[i] = _map_point(crows[i], rrows[i], z[i], periods[i], tangents[i], D, S, K)
             i = fetch_add(taken, 0)
 
 
 @njit(**JIT)
-def _map_point(c, r, z, periods, D, S, K):
+def _map_point(c, r, z, periods, tan, D, S, K):
     """One point of map_points: z (D,) replaced by its state after ``periods`` forcing
-    periods; False where the run diverged."""
+    periods, the tangents ``tan`` (n, D) carried along; False where the run diverged."""
     (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
      strobe, y_p, scale) = _tables(c, r, D, S, K)
     omega, steps, substep, limit, volt = r[0], int(r[1]), r[2], r[5], int(r[7])
@@ -911,5 +1001,5 @@ def _map_point(c, r, z, periods, D, S, K):
     _, status, _, _ = _advance(z, st, periods, False, np.empty((0, 1)), -1, omega,
                                2.0 * math.pi / omega, steps, substep, lam, grid, pen, pl,
                                pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
-                               volt, strobe, y_p, scale, 0.0, limit, buf, acc, D, S, K)
+                               volt, strobe, y_p, scale, 0.0, limit, buf, acc, tan, D, S, K)
     return status != DIVERGED
