@@ -4,10 +4,10 @@
 
 The beam's points are solved by their own solver (``beam_runs.solve_beam``): a short
 transient, Newton attempts on the period map with monodromies by the variational
-equations (the motion integrated on between them, as the tip-mass solver's), the orbit measured by the
-modal engine, then the same at twice the steps (chord steps with the last monodromy taken,
-Newton with copies where they stall and the motion would settle slowly) until the change
-meets the accuracy target, and the Floquet
+equations (the motion integrated on between them, as the tip-mass solver's), the orbit
+measured by the modal engine, then the same at twice the steps (chord steps with the last
+monodromy taken, Newton where they stall and the motion would settle slowly) until the
+change meets the accuracy target, and the Floquet
 multipliers by forward differences at the step reported. This counts the modal engine's
 work by what it was run for, in forcing periods at each point's first steps per period (a
 run at twice the steps counts twice), on a gap x frequency grid of each preset at its own
