@@ -58,10 +58,12 @@ TRANSIENT = 24
 #: monodromy reused) at each finer one [-].
 NEWTON = 8
 CHORD = 8
-#: Forward-difference step of the monodromy, relative to each component's scale [-].
+#: Forward-difference step of the multipliers' monodromy, and the move below which
+#: Newton keeps its monodromy, relative to each component's scale [-].
 PERTURBATION = 1e-6
 #: A fixed point whose monodromy's spectral radius exceeds this is unstable: not the
-#: motion's steady state (the margin: the forward-difference monodromy's error) [-].
+#: motion's steady state (the margin: the monodromy's error, that of its variational
+#: equations at the first steps, up to about 1e-4 on the presets) [-].
 UNSTABLE = 1.0 + 1e-3
 #: The scalar outputs of a beam point, in the order of a solution's table.
 SCALARS = ("power", "v_rms", "v_peak", "power_peak", "x_max", "x_min",
@@ -595,8 +597,9 @@ def _multipliers(g: _Group, done: dict) -> dict:
     (point -> ((outputs, end state, strobes, level), estimate)): the monodromy of its
     orbit by forward differences at the level reported, or the contact-free map's in
     closed form where the orbit provably never reaches a stop. Newton's monodromy at the
-    first level is off by that level's discretization error (1e-5 to 1e-4 in the
-    multipliers on the presets), the forward differences' own error is 1e-6 or less."""
+    first level is off by that level's discretization error and its variational
+    equations' (up to 6e-4 in the multipliers where measured, docs/numerics.md), the
+    forward differences' own error is 1e-6 or less."""
     settled = [k for k, ((out, *_), _) in done.items() if out[0]["status"] == _SETTLED]
     found = {}
     for lv in sorted({done[k][0][3] for k in settled}):

@@ -196,7 +196,7 @@ def map_states(packs, states, periods) -> tuple:
     of its point (``packs``, one model's dimensions). Returns (end states (n, D), ok (n,):
     False where the run diverged)."""
     D = packs[0].dims[0]
-    ends, ok, _ = _map(packs, states, periods, np.empty((len(packs), 0, D), complex))
+    ends, ok, _ = _map(packs, states, periods, np.empty((len(packs), 2, D, 0)))
     return ends, ok
 
 
@@ -208,23 +208,24 @@ def variational_monodromies(packs, states, periods) -> tuple:
     derivative of the engine's map by about the map's own error. Returns (the Jacobians
     (n, D, D), the images P^p(state) (n, D), ok (n,): False where the run diverged or a
     Jacobian is not finite)."""
-    # (the tangents start as the changes of z of a unit change of each component of y:
-    # the rows of W^-1's transpose; they end as the changes of z that y's bring)
-    tangents = np.array([pk.inverse.T for pk in packs], dtype=complex)
+    # (the tangents start as the changes of z of a unit change of each component of y,
+    # W^-1's columns, and end as the changes of z those bring at the run's end)
+    tangents = np.array([(pk.inverse.real, pk.inverse.imag) for pk in packs])
     ends, ok, tangents = _map(packs, states, periods, tangents)
-    jac = np.array([(pk.basis @ t.T).real for pk, t in zip(packs, tangents)])
+    jac = np.array([pk.basis.real @ t[0] - pk.basis.imag @ t[1]
+                    for pk, t in zip(packs, tangents)])
     return jac, ends, ok & np.isfinite(jac).all(axis=(1, 2))
 
 
 def _map(packs, states, periods, tangents) -> tuple:
-    """map_states, with ``tangents`` (n, m, D) (changes of z) carried along; returns
-    (end states, ok, tangents)."""
+    """map_states, with ``tangents`` (n, 2, D, m) (m changes of z: real and imaginary
+    parts, component by tangent) carried along; returns (end states, ok, tangents)."""
     D, S, K = packs[0].dims
     z = np.array([pk.to_modal(y) for pk, y in zip(packs, states)], dtype=complex)
     ok = np.empty(len(packs), dtype=bool)
     rrows = np.array([pk.rrow for pk in packs])
     periods = np.asarray(periods, dtype=np.int64)
-    tangents = np.ascontiguousarray(tangents, dtype=complex)
+    tangents = np.ascontiguousarray(tangents, dtype=float)
     modal.map_points(np.array([pk.crow for pk in packs]), rrows, z, periods, tangents, ok,
                      _threads(rrows, periods, D), D, S, K)
     return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok, tangents

@@ -394,13 +394,16 @@ def _lawson(z, t, tau, e1, eh, out, omega, pen, pl, pen_p, inp, gap, kh, ch, F, 
 
 @njit(**JIT)
 def _carry(lam, tan, tau, D):
-    """The tangents ``tan`` (rows, each (D,)) carried along tau [s] of the exact
-    contact-free flow: exp(lam tau) each component."""
+    """The tangents ``tan`` (2, D, m: real and imaginary parts, component by tangent)
+    carried along tau [s] of the exact contact-free flow: exp(lam tau) each component."""
     if tau != 0.0:
+        tr, ti = tan[0], tan[1]
         for k in range(D):
             e = cmath.exp(lam[k] * tau)
-            for c in range(tan.shape[0]):
-                tan[c, k] *= e
+            er, ei = e.real, e.imag
+            for c in range(tr.shape[1]):
+                a, b = tr[k, c], ti[k, c]
+                tr[k, c], ti[k, c] = er * a - ei * b, er * b + ei * a
 
 
 @njit(inline="always", **JIT)
@@ -414,47 +417,83 @@ def _slopes(w, t, omega, pen, pl, pen_p, gap, kh, ch, sd, sr, D, S):
 
 
 @njit(inline="always", **JIT)
-def _pushed(sd, sr, pen, pl, inp, v, g, D, S):
-    """g (D,) = sum_s inp_s dF_s: how the forces' change along the tangent v (D,) drives
-    z, dF_s = sd_s Re(pen_s v) + sr_s Re(pl_s v)."""
-    for k in range(D):
-        g[k] = 0j
+def _pushed(sd, sr, pen, pl, inp, v, g, df, D, S):
+    """g (2, D, m) = sum_s inp_s dF_s: how the forces' change along each tangent of v
+    (2, D, m) drives z, dF_s = sd_s Re(pen_s v) + sr_s Re(pl_s v) (into df (S, m)). The
+    loops run along the tangents, which lie next to each other, so that they vectorize."""
+    m = v.shape[2]
     for s in range(S):
+        for c in range(m):
+            df[s, c] = 0.0
         if sd[s] != 0.0 or sr[s] != 0.0:
-            df = sd[s] * _dot_re(pen, s, v, D) + sr[s] * _dot_re(pl, s, v, D)
             for k in range(D):
-                g[k] += inp[s, k] * df
+                a = sd[s] * pen[s, k].real + sr[s] * pl[s, k].real
+                b = sd[s] * pen[s, k].imag + sr[s] * pl[s, k].imag
+                for c in range(m):
+                    df[s, c] += a * v[0, k, c] - b * v[1, k, c]
+    for k in range(D):
+        for c in range(m):
+            g[0, k, c] = 0.0
+            g[1, k, c] = 0.0
+        for s in range(S):
+            ar, ai = inp[s, k].real, inp[s, k].imag
+            for c in range(m):
+                g[0, k, c] += ar * df[s, c]
+                g[1, k, c] += ai * df[s, c]
+
+
+@njit(inline="always", **JIT)
+def _axpy(e, x, h, y, out, k, m):
+    """out[:, k] = e_k (x[:, k] + h y[:, k]) for complex e_k, over the m tangents."""
+    er, ei = e.real, e.imag
+    for c in range(m):
+        a = x[0, k, c] + h * y[0, k, c]
+        b = x[1, k, c] + h * y[1, k, c]
+        out[0, k, c], out[1, k, c] = er * a - ei * b, er * b + ei * a
 
 
 @njit(**JIT)
 def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, omega, pen, pl, pen_p, inp, gap,
-                     kh, ch, slope, vec, D, S):
-    """The tangents ``tan`` (rows) carried along _lawson's step of length tau [s] from z at
-    t, whose stages it left in w2, w3, w4 (e1, eh: exp(lam tau), exp(lam tau / 2)): the
+                     kh, ch, slope, work, df, D, S):
+    """The tangents ``tan`` (2, D, m) carried along _lawson's step of length tau [s] from z
+    at t, whose stages it left in w2, w3, w4 (e1, eh: exp(lam tau), exp(lam tau / 2)): the
     same RK4 on the variational equations, so that the tangents are the derivative of
-    the step with its lengths held. ``slope`` (8, S) and ``vec`` (4, D) are room."""
+    the step with its lengths held. ``slope`` (8, S), ``work`` (4, 2, D, m) and ``df``
+    (S, m) are room."""
+    m = tan.shape[2]
     hh, h6 = 0.5 * tau, tau / 6.0
     _slopes(z, t, omega, pen, pl, pen_p, gap, kh, ch, slope[0], slope[1], D, S)
     _slopes(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[2], slope[3], D, S)
     _slopes(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[4], slope[5], D, S)
     _slopes(w4, t + tau, omega, pen, pl, pen_p, gap, kh, ch, slope[6], slope[7], D, S)
-    g, u, g2, o = vec[0], vec[1], vec[2], vec[3]
-    for c in range(tan.shape[0]):
-        v = tan[c]
-        _pushed(slope[0], slope[1], pen, pl, inp, v, g, D, S)
-        for k in range(D):
-            u[k] = eh[k] * (v[k] + hh * g[k])
-            o[k] = e1[k] * (v[k] + h6 * g[k])
-        _pushed(slope[2], slope[3], pen, pl, inp, u, g2, D, S)
-        for k in range(D):
-            u[k] = eh[k] * v[k] + hh * g2[k]
-        _pushed(slope[4], slope[5], pen, pl, inp, u, g, D, S)
-        for k in range(D):
-            u[k] = e1[k] * v[k] + tau * eh[k] * g[k]
-            o[k] += 2.0 * h6 * eh[k] * (g2[k] + g[k])
-        _pushed(slope[6], slope[7], pen, pl, inp, u, g, D, S)
-        for k in range(D):
-            v[k] = o[k] + h6 * g[k]
+    g, u, g2, o = work[0], work[1], work[2], work[3]
+    _pushed(slope[0], slope[1], pen, pl, inp, tan, g, df, D, S)
+    for k in range(D):
+        _axpy(eh[k], tan, hh, g, u, k, m)
+        _axpy(e1[k], tan, h6, g, o, k, m)
+    _pushed(slope[2], slope[3], pen, pl, inp, u, g2, df, D, S)
+    for k in range(D):
+        _axpy(eh[k], tan, 0.0, g, u, k, m)
+        for c in range(m):
+            u[0, k, c] += hh * g2[0, k, c]
+            u[1, k, c] += hh * g2[1, k, c]
+    _pushed(slope[4], slope[5], pen, pl, inp, u, g, df, D, S)
+    for k in range(D):
+        _axpy(eh[k], g, 0.0, g, u, k, m)  # (eh g3, times tau below)
+        er, ei = e1[k].real, e1[k].imag
+        for c in range(m):
+            a, b = tan[0, k, c], tan[1, k, c]
+            u[0, k, c] = er * a - ei * b + tau * u[0, k, c]
+            u[1, k, c] = er * b + ei * a + tau * u[1, k, c]
+        _axpy(2.0 * h6 * eh[k], g2, 1.0, g, g2, k, m)  # (2 h6 eh (g2 + g3), into g2)
+        for c in range(m):
+            o[0, k, c] += g2[0, k, c]
+            o[1, k, c] += g2[1, k, c]
+    _pushed(slope[6], slope[7], pen, pl, inp, u, g, df, D, S)
+    for k in range(D):
+        for c in range(m):
+            tan[0, k, c] = o[0, k, c] + h6 * g[0, k, c]
+            tan[1, k, c] = o[1, k, c] + h6 * g[1, k, c]
 
 
 @njit(**JIT)
@@ -529,8 +568,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     ``settle`` > 0: stop at the first period whose strobe repeats one of the last
     MAX_ORBIT within ``settle`` times each component's scale. ``book``: accumulate into
     ``acc`` (the head's sums, then K maxima, K minima). ``nrec`` >= 0: record each sample
-    into ``rec`` (time, forces, outputs) from row nrec on. ``tan`` (n, D): tangents (each
-    row a change of z) carried along (modified; n = 0: none): the variational equations,
+    into ``rec`` (time, forces, outputs) from row nrec on. ``tan`` (2, D, m): m tangents
+    (changes of z: real and imaginary parts, component by tangent) carried along (modified;
+    m = 0: none): the variational equations,
     exact clear of the stops (one product per component and tangent for each stretch
     between contacts) and the sub-steps' RK4 inside them. Returns (orbit period p, 0 for
     none; status; periods run; rows recorded)."""
@@ -542,8 +582,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                   np.empty(D, np.complex128))
     e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
     stages = np.empty((3, S))
-    tangents = tan.shape[0] > 0
-    slope, vec = np.empty((8, S)), np.empty((4, D), np.complex128)
+    tangents = tan.shape[2] > 0
+    slope, work = np.empty((8, S)), np.empty((4, 2, D, tan.shape[2]))
+    df = np.empty((S, tan.shape[2]))
     t_tan = 0.0  # the time in the period the tangents have been carried to [s]
     # the bound on a surface's rise above its chord over a grid step, taken once per
     # contact-free stretch (|z_k| only decays along it): where it cannot rule out a touch,
@@ -707,7 +748,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     if tangents:
                         _lawson_tangents(z, w2, w3, w4, t, tau, e1 if cut_here else sub1[grade],
                                          eh if cut_here else subh[grade], tan, omega, pen, pl,
-                                         pen_p, inp, gap, kh, ch, slope, vec, D, S)
+                                         pen_p, inp, gap, kh, ch, slope, work, df, D, S)
                         t_tan = t + tau
                     z[:] = zn
                     t += tau
@@ -748,7 +789,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         break
                     if tangents:  # (along the last sub-step the secant steps computed)
                         _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, omega, pen, pl,
-                                         pen_p, inp, gap, kh, ch, slope, vec, D, S)
+                                         pen_p, inp, gap, kh, ch, slope, work, df, D, S)
                         t_tan = t + ts
                     z[:] = zn
                     t += ts
@@ -863,7 +904,7 @@ def run_point(c, r, z, metrics, ring, D, S, K):
     p, status, run, _ = _advance(z, st, max_periods, False, rec, -1, omega, T, steps, substep,
                                  lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out,
                                  outl, out_p, out_f, int(r[7]), strobe, y_p, scale, settle,
-                                 limit, buf, acc, np.empty((0, D), np.complex128), D, S, K)
+                                 limit, buf, acc, np.empty((2, D, 0)), D, S, K)
     if status == SETTLED and p == 0:
         status = NOT_SETTLED
     _measure(tables, r, z, st, max(p, 1), status, metrics, buf, D, S, K)
@@ -891,7 +932,7 @@ def _measure(tables, r, z, st, periods, status, metrics, buf, D, S, K):
                                     steps, substep, lam, grid, pen, pl, pl2, pen_p, pab, inp,
                                     gap, kh, ch, out, outl, out_p, out_f, int(r[7]), strobe,
                                     y_p, scale, 0.0, limit, buf, acc,
-                                    np.empty((0, D), np.complex128), D, S, K)
+                                    np.empty((2, D, 0)), D, S, K)
         if status2 == DIVERGED:
             status = DIVERGED
     metrics[:] = acc
@@ -969,7 +1010,7 @@ def record_samples(c, r, z, periods, rec, D, S, K):
     _, _, _, n = _advance(z, st, periods, False, rec, 0, omega, T, steps, substep, lam, grid,
                           pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
                           volt, strobe, y_p, scale, 0.0, limit, buf, acc,
-                          np.empty((0, D), np.complex128), D, S, K)
+                          np.empty((2, D, 0)), D, S, K)
     return n
 
 
@@ -977,8 +1018,9 @@ def record_samples(c, r, z, periods, rec, D, S, K):
 def map_points(crows, rrows, z, periods, tangents, ok, threads, D, S, K):
     """The period map: every point (rows as settle_points) from z (n, D), replaced by its
     state after periods[i] forcing periods on ``threads`` threads, with the tangents
-    ``tangents[i]`` (rows, each a change of z; (n, 0, D): none) carried along (replaced:
-    the map's derivative applied to them); ok[i] is False where the run diverged."""
+    ``tangents[i]`` (2, D, m: changes of z, real and imaginary parts, component by
+    tangent; m = 0: none) carried along (replaced: the map's derivative applied to them);
+    ok[i] is False where the run diverged."""
     n = crows.shape[0]
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(threads):  # (points taken as settle_points does)
@@ -991,7 +1033,7 @@ def map_points(crows, rrows, z, periods, tangents, ok, threads, D, S, K):
 @njit(**JIT)
 def _map_point(c, r, z, periods, tan, D, S, K):
     """One point of map_points: z (D,) replaced by its state after ``periods`` forcing
-    periods, the tangents ``tan`` (n, D) carried along; False where the run diverged."""
+    periods, the tangents ``tan`` (2, D, m) carried along; False where the run diverged."""
     (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
      strobe, y_p, scale) = _tables(c, r, D, S, K)
     omega, steps, substep, limit, volt = r[0], int(r[1]), r[2], r[5], int(r[7])
