@@ -7,12 +7,12 @@ transient, Newton attempts on the period map with monodromies by the variational
 equations (the motion integrated on between them, as the tip-mass solver's), the orbit
 measured by the modal engine, then the same at twice the steps (chord steps with the last
 monodromy taken, Newton where they stall and the motion would settle slowly) until the
-change meets the accuracy target, and the Floquet
-multipliers by forward differences at the step reported. This counts the modal engine's
-work by what it was run for, in forcing periods at each point's first steps per period (a
-run at twice the steps counts twice), on a gap x frequency grid of each preset at its own
-budget and accuracy. The solver is not changed: ``modal_map``'s calls and the solver's
-phases are wrapped while a solve runs.
+change meets the accuracy target, and the Floquet multipliers by the variational equations
+at the step reported. This counts the modal engine's work by what it was run for, in
+forcing periods at each point's first steps per period (a run at twice the steps counts
+twice; a run that carries the variational equations counts as a run), on a gap x frequency
+grid of each preset at its own budget and accuracy. The solver is not changed:
+``modal_map``'s calls and the solver's phases are wrapped while a solve runs.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ KINDS = {
     "measure": "the orbit measured (the first steps)",
     "chord": "chord steps (finer steps)",
     "finer": "the orbit measured, or the motion settled and measured (finer steps)",
-    "multipliers": "multipliers' copies (the step reported)",
+    "multipliers": "multipliers' monodromy (the step reported)",
 }
 #: Runs that carried the variational equations (counted in their kind above too).
 VARIATIONAL = "of all: runs carrying the variational equations"

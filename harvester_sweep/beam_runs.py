@@ -58,12 +58,12 @@ TRANSIENT = 24
 #: monodromy reused) at each finer one [-].
 NEWTON = 8
 CHORD = 8
-#: Forward-difference step of the multipliers' monodromy, and the move below which
-#: Newton keeps its monodromy, relative to each component's scale [-].
+#: The move of an iterate below which Newton keeps its monodromy, relative to each
+#: component's scale [-].
 PERTURBATION = 1e-6
 #: A fixed point whose monodromy's spectral radius exceeds this is unstable: not the
-#: motion's steady state (the margin: the monodromy's error, that of its variational
-#: equations at the first steps, up to about 1e-4 on the presets) [-].
+#: motion's steady state (the margin: the monodromy's error at the first steps, 1e-5 to
+#: 1e-4 on the presets) [-].
 UNSTABLE = 1.0 + 1e-3
 #: The scalar outputs of a beam point, in the order of a solution's table.
 SCALARS = ("power", "v_rms", "v_peak", "power_peak", "x_max", "x_min",
@@ -419,11 +419,12 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
 
 def _newton_at_level(g, packs, todo, start, per, chord, jac) -> Newton:
     """The chord steps ``chord`` at a finer level (over points ``todo``, from their coarser
-    orbits ``start`` (n, D) of periods ``per`` (n,)), with Newton at that level, by
-    copies, from the coarser orbit where they did not converge and the motion from there
-    would take longer to settle by the engine's test than that Newton takes (its D + 1
-    copies and a run to confirm): its stable fixed points are taken as converged, and
-    their monodromies serve the next levels' chord steps (into ``jac``, by point).
+    orbits ``start`` (n, D) of periods ``per`` (n,)), with Newton at that level from the
+    coarser orbit where they did not converge and the motion from there would take
+    longer to settle by the engine's test than (D + 2) p periods (what that Newton took
+    when its monodromy took D + 1 copies, and a run to confirm; kept as the rule, so that
+    the same points take it): its stable fixed points are taken as converged, and their
+    monodromies serve the next levels' chord steps (into ``jac``, by point).
 
     Near a multiplier of modulus near 1 the chord steps with a coarser monodromy stall
     (I - M nearly singular amplifies its error), and the motion settles slowly too: a
@@ -595,11 +596,10 @@ def _attempt(g, packs, trying, e, run, period, touched, orbit, jac, refused, lef
 def _multipliers(g: _Group, done: dict) -> dict:
     """The Floquet multipliers (largest modulus first) of each settled point of ``done``
     (point -> ((outputs, end state, strobes, level), estimate)): the monodromy of its
-    orbit by forward differences at the level reported, or the contact-free map's in
-    closed form where the orbit provably never reaches a stop. Newton's monodromy at the
-    first level is off by that level's discretization error and its variational
-    equations' (up to 6e-4 in the multipliers where measured, docs/numerics.md), the
-    forward differences' own error is 1e-6 or less."""
+    orbit by the variational equations at the level reported, or the contact-free map's
+    in closed form where the orbit provably never reaches a stop. Newton's monodromy at
+    the first level is off by that level's discretization error (1e-5 to 1e-4 in the
+    multipliers on the presets)."""
     settled = [k for k, ((out, *_), _) in done.items() if out[0]["status"] == _SETTLED]
     found = {}
     for lv in sorted({done[k][0][3] for k in settled}):
@@ -615,9 +615,8 @@ def _multipliers(g: _Group, done: dict) -> dict:
         copied = np.flatnonzero(~free)
         if not len(copied):
             continue
-        jac, _, ok = modal_map.monodromies(
-            [packs[j] for j in copied], ends[copied], periods[copied],
-            np.array([PERTURBATION * g.scale[which[j]] for j in copied]))
+        jac, _, ok = modal_map.variational_monodromies(
+            [packs[j] for j in copied], ends[copied], periods[copied])
         for i, j in enumerate(copied):
             if ok[i]:
                 found[which[j]] = sorted_multipliers(jac[i][None])[0]

@@ -75,11 +75,12 @@ def test_the_contact_free_map_and_its_reach_are_the_linear_systems():
 
 
 def test_newtons_monodromy_is_the_period_maps_derivative():
-    """Newton's monodromy by the variational equations (modal_map.variational_monodromies):
+    """The monodromy by the variational equations (modal_map.variational_monodromies):
     clear of the stop it is SciPy's expm of the linear system over the periods; on an
     orbit with contact it is the derivative that central differences take of the engine's
-    own map, to a difference that falls as the contact step does (the variational
-    equations hold the sub-steps' lengths, which the map moves with the touch)."""
+    own map, to a difference that falls as the contact step does. Without the correction
+    for the touch's move (the contact's sub-steps are laid out from it) the two part by
+    1.9e-3 of the monodromy at the first steps, and by 3.7e-4 two halvings on."""
     free = resolve_beam_parameters(n_modes=3, frequency=150.0, gap=1e-2)
     bs = system_of(free)
     pack = pack_beam(free, bs, *first_steps(free, bs))
@@ -101,7 +102,7 @@ def test_newtons_monodromy_is_the_period_maps_derivative():
                                            central=True)
         assert ok[0] and ok_c[0]
         apart.append(np.abs((J[0] - C[0]) / s).max() / np.abs(C[0] / s).max())
-    assert apart[0] < 5e-3 and apart[1] < apart[0] / 3
+    assert apart[0] < 1e-4 and apart[1] < apart[0] / 3
 
 
 def test_one_mode_at_the_tip_is_the_tip_mass_model():

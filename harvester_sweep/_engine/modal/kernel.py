@@ -22,7 +22,11 @@ located inside the sub-step by the Hermite interpolant of the switching function
 secant steps of the RK4 sub-step itself.
 
 The period map is this integrator's own: a point's state at each forcing period's end,
-every switch located by the same rules, so a settled orbit is a fixed point of it.
+every switch located by the same rules, so a settled orbit is a fixed point of it. A run
+can carry tangents (the variational equations): exact and free clear of the stops, the
+sub-steps' RK4 in contact, and at a contact's end a correction for the move of the
+located switch it began at, which its sub-steps are laid out from; they give the map's
+derivative without copies.
 """
 
 from __future__ import annotations
@@ -93,6 +97,15 @@ def _dot_re(a, s, z, D):
     acc = 0.0
     for k in range(D):
         acc += a[s, k].real * z[k].real - a[s, k].imag * z[k].imag
+    return acc
+
+
+@njit(inline="always", **JIT)
+def _dot_re2(a, s, tan, c, D):
+    """Re(sum_k a[s, k] v[k]) of tangent c of ``tan`` (2, D, m)."""
+    acc = 0.0
+    for k in range(D):
+        acc += a[s, k].real * tan[0, k, c] - a[s, k].imag * tan[1, k, c]
     return acc
 
 
@@ -417,14 +430,16 @@ def _slopes(w, t, omega, pen, pl, pen_p, gap, kh, ch, sd, sr, D, S):
 
 
 @njit(inline="always", **JIT)
-def _pushed(sd, sr, pen, pl, inp, v, g, df, D, S):
+def _pushed(sd, sr, xd, xr, pen, pl, inp, v, g, df, D, S):
     """g (2, D, m) = sum_s inp_s dF_s: how the forces' change along each tangent of v
-    (2, D, m) drives z, dF_s = sd_s Re(pen_s v) + sr_s Re(pl_s v) (into df (S, m)). The
-    loops run along the tangents, which lie next to each other, so that they vectorize."""
+    (2, D, m) drives z, dF_s = sd_s (Re(pen_s v) + xd_s) + sr_s (Re(pl_s v) + xr_s) (into
+    df (S, m)); xd, xr (S,): the penetrations' and rates' own change, 0 but for the shift
+    of a contact's start (_lawson_tangents). The loops run along the tangents, which lie
+    next to each other, so that they vectorize."""
     m = v.shape[2]
     for s in range(S):
         for c in range(m):
-            df[s, c] = 0.0
+            df[s, c] = sd[s] * xd[s] + sr[s] * xr[s]
         if sd[s] != 0.0 or sr[s] != 0.0:
             for k in range(D):
                 a = sd[s] * pen[s, k].real + sr[s] * pl[s, k].real
@@ -452,32 +467,47 @@ def _axpy(e, x, h, y, out, k, m):
         out[0, k, c], out[1, k, c] = er * a - ei * b, er * b + ei * a
 
 
+@njit(inline="always", **JIT)
+def _explicit(t, omega, pen_p, xd, xr, timed, S):
+    """The rates [m/s] (into xd) and their rates [m/s^2] (into xr) at which each surface's
+    penetration and rate change with t alone, the state held (the forcing's linear steady
+    state); 0 unless ``timed``."""
+    sn, cs = math.sin(omega * t), math.cos(omega * t)
+    for s in range(S):
+        xd[s] = omega * _phasor(pen_p[s], cs, -sn) if timed else 0.0
+        xr[s] = -omega * omega * _phasor(pen_p[s], sn, cs) if timed else 0.0
+
+
 @njit(**JIT)
-def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, omega, pen, pl, pen_p, inp, gap,
-                     kh, ch, slope, work, df, D, S):
+def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, timed, omega, pen, pl, pen_p, inp,
+                     gap, kh, ch, slope, work, df, D, S):
     """The tangents ``tan`` (2, D, m) carried along _lawson's step of length tau [s] from z
     at t, whose stages it left in w2, w3, w4 (e1, eh: exp(lam tau), exp(lam tau / 2)): the
     same RK4 on the variational equations, so that the tangents are the derivative of
-    the step with its lengths held. ``slope`` (8, S), ``work`` (4, 2, D, m) and ``df``
-    (S, m) are room."""
+    the step with its lengths held; with ``timed``, the step's derivative by a shift of
+    its start time, the state's change ``tan`` (the stages' explicit times move too).
+    ``slope`` (16, S), ``work`` (4, 2, D, m) and ``df`` (S, m) are room."""
     m = tan.shape[2]
     hh, h6 = 0.5 * tau, tau / 6.0
     _slopes(z, t, omega, pen, pl, pen_p, gap, kh, ch, slope[0], slope[1], D, S)
     _slopes(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[2], slope[3], D, S)
     _slopes(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[4], slope[5], D, S)
     _slopes(w4, t + tau, omega, pen, pl, pen_p, gap, kh, ch, slope[6], slope[7], D, S)
+    _explicit(t, omega, pen_p, slope[8], slope[9], timed, S)
+    _explicit(t + hh, omega, pen_p, slope[10], slope[11], timed, S)
+    _explicit(t + tau, omega, pen_p, slope[12], slope[13], timed, S)
     g, u, g2, o = work[0], work[1], work[2], work[3]
-    _pushed(slope[0], slope[1], pen, pl, inp, tan, g, df, D, S)
+    _pushed(slope[0], slope[1], slope[8], slope[9], pen, pl, inp, tan, g, df, D, S)
     for k in range(D):
         _axpy(eh[k], tan, hh, g, u, k, m)
         _axpy(e1[k], tan, h6, g, o, k, m)
-    _pushed(slope[2], slope[3], pen, pl, inp, u, g2, df, D, S)
+    _pushed(slope[2], slope[3], slope[10], slope[11], pen, pl, inp, u, g2, df, D, S)
     for k in range(D):
         _axpy(eh[k], tan, 0.0, g, u, k, m)
         for c in range(m):
             u[0, k, c] += hh * g2[0, k, c]
             u[1, k, c] += hh * g2[1, k, c]
-    _pushed(slope[4], slope[5], pen, pl, inp, u, g, df, D, S)
+    _pushed(slope[4], slope[5], slope[10], slope[11], pen, pl, inp, u, g, df, D, S)
     for k in range(D):
         _axpy(eh[k], g, 0.0, g, u, k, m)  # (eh g3, times tau below)
         er, ei = e1[k].real, e1[k].imag
@@ -489,11 +519,32 @@ def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, omega, pen, pl, pen_p, 
         for c in range(m):
             o[0, k, c] += g2[0, k, c]
             o[1, k, c] += g2[1, k, c]
-    _pushed(slope[6], slope[7], pen, pl, inp, u, g, df, D, S)
+    _pushed(slope[6], slope[7], slope[12], slope[13], pen, pl, inp, u, g, df, D, S)
     for k in range(D):
         for c in range(m):
             tan[0, k, c] = o[0, k, c] + h6 * g[0, k, c]
             tan[1, k, c] = o[1, k, c] + h6 * g[1, k, c]
+
+
+@njit(**JIT)
+def _shift(lam, z, shifted, tan, moves, inp, F, D, S):
+    """The tangents ``tan`` (2, D, m) corrected, at the end of a contact that began at a
+    located switch, for that switch's move: each tangent c moved it by ``moves[c]`` [s],
+    and the contact's sub-steps, laid out from it, moved with it. ``shifted`` (2, D, 1):
+    the derivative of the state z at the contact's end by that shift, against which the
+    flow that takes over (its vector field at z, with the forces F [N] where the end is
+    a fixed time) has moved by the same shift. Where the flow is exact the two agree: the
+    force switches on and off continuously. The sub-steps do not integrate the force's
+    root at the switch to their order, and the correction is what makes the tangents the
+    derivative of the engine's own map."""
+    for k in range(D):
+        f = lam[k] * z[k]
+        for s in range(S):
+            f += inp[s, k] * F[s]
+        br, bi = shifted[0, k, 0] - f.real, shifted[1, k, 0] - f.imag
+        for c in range(tan.shape[2]):
+            tan[0, k, c] += br * moves[c]
+            tan[1, k, c] += bi * moves[c]
 
 
 @njit(**JIT)
@@ -583,8 +634,13 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
     stages = np.empty((3, S))
     tangents = tan.shape[2] > 0
-    slope, work = np.empty((8, S)), np.empty((4, 2, D, tan.shape[2]))
+    slope, work = np.empty((16, S)), np.empty((4, 2, D, tan.shape[2]))
     df = np.empty((S, tan.shape[2]))
+    # the shift of a contact's start at a located switch (_shift): each tangent's move of
+    # it [s], the state's derivative by it, and whether a contact carries one
+    moves, shifted = np.zeros(tan.shape[2]), np.zeros((2, D, 1))
+    shift_work, shift_df = np.empty((4, 2, D, 1)), np.empty((S, 1))
+    timing = False
     t_tan = 0.0  # the time in the period the tangents have been carried to [s]
     # the bound on a surface's rise above its chord over a grid step, taken once per
     # contact-free stretch (|z_k| only decays along it): where it cannot rule out a touch,
@@ -702,6 +758,20 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     _flow(lam, z, best, zn, D)
                     z[:] = zn
                     t += best
+                    if tangents:  # (each tangent's move of the switch: _shift)
+                        _carry(lam, tan, t - t_tan, D)
+                        t_tan = t
+                        d, r, a = _surface(bs, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
+                                           D, S)
+                        for c in range(tan.shape[2]):
+                            if bkind == TOUCH:
+                                moves[c] = -(_dot_re2(pen, bs, tan, c, D)) / r
+                            else:
+                                moves[c] = -(_dot_re2(pl, bs, tan, c, D)) / a
+                        for k in range(D):
+                            v = lam[k] * z[k]  # (the flow's vector field there)
+                            shifted[0, k, 0], shifted[1, k, 0] = v.real, v.imag
+                        timing = True
                     on_grid = False
                     mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
                     entered, stepped = bkind, False
@@ -746,9 +816,16 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 c1 = hertz.clip(r1, ch[act])
                 if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
                     if tangents:
-                        _lawson_tangents(z, w2, w3, w4, t, tau, e1 if cut_here else sub1[grade],
-                                         eh if cut_here else subh[grade], tan, omega, pen, pl,
-                                         pen_p, inp, gap, kh, ch, slope, work, df, D, S)
+                        ea, eb = (e1, eh) if cut_here else (sub1[grade], subh[grade])
+                        _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, False, omega, pen,
+                                         pl, pen_p, inp, gap, kh, ch, slope, work, df, D, S)
+                        if timing:
+                            _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, shifted, True,
+                                             omega, pen, pl, pen_p, inp, gap, kh, ch, slope,
+                                             shift_work, shift_df, D, S)
+                            if last:  # (the period's end, a fixed time, ends the shift)
+                                _shift(lam, zn, shifted, tan, moves, inp, F, D, S)
+                                timing = False
                         t_tan = t + tau
                     z[:] = zn
                     t += tau
@@ -788,8 +865,14 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         blown = True
                         break
                     if tangents:  # (along the last sub-step the secant steps computed)
-                        _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, omega, pen, pl,
-                                         pen_p, inp, gap, kh, ch, slope, work, df, D, S)
+                        _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, False, omega, pen,
+                                         pl, pen_p, inp, gap, kh, ch, slope, work, df, D, S)
+                        if timing:  # (the force is off: the free flow takes over)
+                            _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, shifted, True,
+                                             omega, pen, pl, pen_p, inp, gap, kh, ch, slope,
+                                             shift_work, shift_df, D, S)
+                            _shift(lam, zn, shifted, tan, moves, inp, zero, D, S)
+                            timing = False
                         t_tan = t + ts
                     z[:] = zn
                     t += ts
