@@ -58,7 +58,8 @@ TRANSIENT = 24
 #: monodromy reused) at each finer one [-].
 NEWTON = 8
 CHORD = 8
-#: The move of an iterate below which Newton keeps its monodromy, relative to each
+#: The move of an iterate below which Newton keeps its monodromy, and the step of a
+#: monodromy by forward differences (the beam's continuation), relative to each
 #: component's scale [-].
 PERTURBATION = 1e-6
 #: A fixed point whose monodromy's spectral radius exceeds this is unstable: not the
@@ -223,8 +224,7 @@ class _Group:
 
     def jacobians(self, packs, which, states, periods):
         """The monodromy of P^p at each state by the variational equations, carried along
-        one run of each (modal_map.variational_monodromies): Newton's, for its steps
-        alone."""
+        one run of each (modal_map.variational_monodromies), with the images and ok."""
         return modal_map.variational_monodromies(packs, states, periods)
 
     def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON,

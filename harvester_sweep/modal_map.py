@@ -204,7 +204,7 @@ def variational_monodromies(packs, states, periods) -> tuple:
     """The Jacobian of the period map P^p at each state by its variational equations,
     carried along one run of each point (map_states' arguments): exact clear of the
     surfaces, the contact sub-steps' own RK4 inside them, and at the end of a contact
-    that began at a located touch, the move of the sub-steps laid out from it. It is the
+    that began at a located switch, the move of the sub-steps laid out from it. It is the
     derivative of the engine's own map but for the sub-steps' lengths near the
     separation, held: on the one-mode beam within 1e-5 of the size of the map's central
     differences at the first steps (tests/physics/test_beam.py). Returns (the Jacobians

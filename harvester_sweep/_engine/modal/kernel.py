@@ -621,10 +621,11 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     ``acc`` (the head's sums, then K maxima, K minima). ``nrec`` >= 0: record each sample
     into ``rec`` (time, forces, outputs) from row nrec on. ``tan`` (2, D, m): m tangents
     (changes of z: real and imaginary parts, component by tangent) carried along (modified;
-    m = 0: none): the variational equations,
-    exact clear of the stops (one product per component and tangent for each stretch
-    between contacts) and the sub-steps' RK4 inside them. Returns (orbit period p, 0 for
-    none; status; periods run; rows recorded)."""
+    m = 0: none) by the variational equations: exact clear of the stops (one product per
+    component and tangent for each stretch between contacts), the sub-steps' RK4 inside
+    them, and at the end of a contact that began at a located switch the correction for
+    that switch's move (_shift). Returns (orbit period p, 0 for none; status; periods run;
+    rows recorded)."""
     h = T / steps
     F = np.zeros(S)
     zero = np.zeros(S)
