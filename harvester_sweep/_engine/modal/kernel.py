@@ -82,6 +82,9 @@ GRAZE = 1e-9
 #: any state's rounding unit, so that no output moves. (A mode that decays from it past
 #: them within one period spends a part of that period there, once.)
 TINY = 1e-200
+#: _lawson_tangents' ``timed``, as numpy booleans: numba compiles a function again for
+#: each literal True or False it is called with.
+TIMED, NOT_TIMED = np.bool_(True), np.bool_(False)
 #: Outcome codes, as the lane engine's STATUS.
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
 #: Kinds of switch that turn a surface's force on or off.
@@ -419,7 +422,7 @@ def _carry(lam, tan, tau, D):
                 tr[k, c], ti[k, c] = er * a - ei * b, er * b + ei * a
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def _slopes(w, t, omega, pen, pl, pen_p, gap, kh, ch, sd, sr, D, S):
     """Each surface's dF/d delta [N/m] into sd and dF/d rate [N s/m] into sr at (w, t)."""
     sn, cs = math.sin(omega * t), math.cos(omega * t)
@@ -429,7 +432,9 @@ def _slopes(w, t, omega, pen, pl, pen_p, gap, kh, ch, sd, sr, D, S):
         sd[s], sr[s] = hertz.slopes(kh[s], d, r, ch[s])
 
 
-@njit(inline="always", **JIT)
+# (_pushed, _slopes and _explicit are compiled once, not inlined into each of their four
+# calls a sub-step: inlined, the modal engine's compile took 70 % longer)
+@njit(**JIT)
 def _pushed(sd, sr, xd, xr, pen, pl, inp, v, g, df, D, S):
     """g (2, D, m) = sum_s inp_s dF_s: how the forces' change along each tangent of v
     (2, D, m) drives z, dF_s = sd_s (Re(pen_s v) + xd_s) + sr_s (Re(pl_s v) + xr_s) (into
@@ -467,7 +472,7 @@ def _axpy(e, x, h, y, out, k, m):
         out[0, k, c], out[1, k, c] = er * a - ei * b, er * b + ei * a
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def _explicit(t, omega, pen_p, xd, xr, timed, S):
     """The rates [m/s] (into xd) and their rates [m/s^2] (into xr) at which each surface's
     penetration and rate change with t alone, the state held (the forcing's linear steady
@@ -524,6 +529,24 @@ def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, timed, omega, pen, pl, 
         for c in range(m):
             tan[0, k, c] = o[0, k, c] + h6 * g[0, k, c]
             tan[1, k, c] = o[1, k, c] + h6 * g[1, k, c]
+
+
+@njit(**JIT)
+def _moves(s, kind, z, t, lam, tan, moves, shifted, omega, pen, pl, pl2, pen_p, pab, gap,
+           zero, D, S):
+    """At a contact's start at a located switch of ``kind`` on surface s, at (z, t): each
+    tangent's move of the switch [s] into ``moves`` (its switching function's change over
+    that function's rate), and the state's change by a shift of the switch, the flow's
+    vector field there, into ``shifted`` (2, D, 1)."""
+    d, r, a = _surface(s, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero, D, S)
+    for c in range(tan.shape[2]):
+        if kind == TOUCH:
+            moves[c] = -_dot_re2(pen, s, tan, c, D) / r
+        else:
+            moves[c] = -_dot_re2(pl, s, tan, c, D) / a
+    for k in range(D):
+        v = lam[k] * z[k]
+        shifted[0, k, 0], shifted[1, k, 0] = v.real, v.imag
 
 
 @njit(**JIT)
@@ -762,16 +785,8 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     if tangents:  # (each tangent's move of the switch: _shift)
                         _carry(lam, tan, t - t_tan, D)
                         t_tan = t
-                        d, r, a = _surface(bs, z, t, omega, pen, pl, pl2, pen_p, pab, gap, zero,
-                                           D, S)
-                        for c in range(tan.shape[2]):
-                            if bkind == TOUCH:
-                                moves[c] = -(_dot_re2(pen, bs, tan, c, D)) / r
-                            else:
-                                moves[c] = -(_dot_re2(pl, bs, tan, c, D)) / a
-                        for k in range(D):
-                            v = lam[k] * z[k]  # (the flow's vector field there)
-                            shifted[0, k, 0], shifted[1, k, 0] = v.real, v.imag
+                        _moves(bs, bkind, z, t, lam, tan, moves, shifted, omega, pen, pl, pl2,
+                               pen_p, pab, gap, zero, D, S)
                         timing = True
                     on_grid = False
                     mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
@@ -818,10 +833,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
                     if tangents:
                         ea, eb = (e1, eh) if cut_here else (sub1[grade], subh[grade])
-                        _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, False, omega, pen,
+                        _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, NOT_TIMED, omega, pen,
                                          pl, pen_p, inp, gap, kh, ch, slope, work, df, D, S)
                         if timing:
-                            _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, shifted, True,
+                            _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, shifted, TIMED,
                                              omega, pen, pl, pen_p, inp, gap, kh, ch, slope,
                                              shift_work, shift_df, D, S)
                             if last:  # (the period's end, a fixed time, ends the shift)
@@ -866,10 +881,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         blown = True
                         break
                     if tangents:  # (along the last sub-step the secant steps computed)
-                        _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, False, omega, pen,
+                        _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, NOT_TIMED, omega, pen,
                                          pl, pen_p, inp, gap, kh, ch, slope, work, df, D, S)
                         if timing:  # (the force is off: the free flow takes over)
-                            _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, shifted, True,
+                            _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, shifted, TIMED,
                                              omega, pen, pl, pen_p, inp, gap, kh, ch, slope,
                                              shift_work, shift_df, D, S)
                             _shift(lam, zn, shifted, tan, moves, inp, zero, D, S)
