@@ -55,7 +55,6 @@ class Tally:
         self.periods = collections.Counter()
         self.first = first  # forcing frequency [rad/s], rounded -> first steps per period
         self.phase = None
-        self.inside = False  # (in a monodromy: its maps are counted as its copies)
         self._saved = []
 
     def _replace(self, owner, name, make):
@@ -105,8 +104,7 @@ class Tally:
 
         def map_states(saved):
             def wrapped(packs, states, periods):
-                if not self.inside:
-                    self._book(packs, periods, self.phase)
+                self._book(packs, periods, self.phase)
                 return saved(packs, states, periods)
             return wrapped
 
@@ -119,23 +117,9 @@ class Tally:
                 return saved(packs, states, periods)
             return wrapped
 
-        def monodromies(saved):
-            def wrapped(packs, states, periods, steps, central=False):
-                copies = 2 * len(states[0]) + 1 if central else len(states[0]) + 1
-                # (outside Newton and the multipliers: the monodromy of an orbit the whole
-                # transient settled on, counted with Newton's)
-                self._book(packs, np.asarray(periods) * copies, self.phase or "newton")
-                self.inside = True
-                try:
-                    return saved(packs, states, periods, steps, central)
-                finally:
-                    self.inside = False
-            return wrapped
-
         self._replace(modal_map, "run", runs)
         self._replace(modal_map, "measure", runs)
         self._replace(modal_map, "map_states", map_states)
-        self._replace(modal_map, "monodromies", monodromies)
         self._replace(modal_map, "variational_monodromies", variational)
         return self
 

@@ -222,11 +222,6 @@ class _Group:
             out.append(pack_beam(p, self.systems[k], steps * 2 ** lv, sub / 2 ** lv))
         return out
 
-    def jacobians(self, packs, which, states, periods):
-        """The monodromy of P^p at each state by the variational equations, carried along
-        one run of each (modal_map.variational_monodromies), with the images and ok."""
-        return modal_map.variational_monodromies(packs, states, periods)
-
     def newton(self, packs, which, states, periods, jac=None, rounds=NEWTON,
                touched=None, retry=None) -> Newton:
         """Fixed points of P^p from ``states`` (len(which), D): full Newton with
@@ -260,11 +255,10 @@ class _Group:
             # tip-mass solver's CHORD), and the iterate runs alone, at a run's cost
             fresh = (moved[idx] > PERTURBATION) if jac is None else np.zeros(len(idx), bool)
             image, ok = np.empty((len(idx), D)), np.empty(len(idx), dtype=bool)
-            copied, alone = idx[fresh], idx[~fresh]
-            if len(copied):
-                jacs[copied], image[fresh], ok[fresh] = self.jacobians(
-                    [packs[j] for j in copied], [which[j] for j in copied], states[copied],
-                    periods[copied])
+            taken, alone = idx[fresh], idx[~fresh]
+            if len(taken):
+                jacs[taken], image[fresh], ok[fresh] = modal_map.variational_monodromies(
+                    [packs[j] for j in taken], states[taken], periods[taken])
             if len(alone):
                 image[~fresh], ok[~fresh] = modal_map.map_states(
                     [packs[j] for j in alone], states[alone], periods[alone])
@@ -371,8 +365,9 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     found = [k for k in todo if m[k, HEAD.status] == _SETTLED
              and (k in ended or m[k, HEAD.period] != period[k])]
     if found:
-        J, _, ok = g.jacobians([packs0[k] for k in found], found, e[found],
-                               np.maximum(m[found, HEAD.period], 1).astype(np.int64))
+        J, _, ok = modal_map.variational_monodromies(
+            [packs0[k] for k in found], e[found],
+            np.maximum(m[found, HEAD.period], 1).astype(np.int64))
         jac[found] = np.where(ok[:, None, None], J, np.nan)
     coarse = {k: (point_outputs(points[k], systems[k], m[k]), e[k], s[k], 0) for k in todo}
     periods_run = {k: run[k] for k in todo}
@@ -612,12 +607,12 @@ def _multipliers(g: _Group, done: dict) -> dict:
         free = np.array([_never_reaches(pk, y) for pk, y in zip(packs, ends)], dtype=bool)
         for j in np.flatnonzero(free):
             found[which[j]] = sorted_multipliers(packs[j].free_monodromy(periods[j])[None])[0]
-        copied = np.flatnonzero(~free)
-        if not len(copied):
+        touching = np.flatnonzero(~free)
+        if not len(touching):
             continue
         jac, _, ok = modal_map.variational_monodromies(
-            [packs[j] for j in copied], ends[copied], periods[copied])
-        for i, j in enumerate(copied):
+            [packs[j] for j in touching], ends[touching], periods[touching])
+        for i, j in enumerate(touching):
             if ok[i]:
                 found[which[j]] = sorted_multipliers(jac[i][None])[0]
     return found

@@ -82,9 +82,6 @@ GRAZE = 1e-9
 #: any state's rounding unit, so that no output moves. (A mode that decays from it past
 #: them within one period spends a part of that period there, once.)
 TINY = 1e-200
-#: _lawson_tangents' ``timed``, as numpy booleans: numba compiles a function again for
-#: each literal True or False it is called with.
-TIMED, NOT_TIMED = np.bool_(True), np.bool_(False)
 #: Outcome codes, as the lane engine's STATUS.
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
 #: Kinds of switch that turn a surface's force on or off.
@@ -422,18 +419,8 @@ def _carry(lam, tan, tau, D):
                 tr[k, c], ti[k, c] = er * a - ei * b, er * b + ei * a
 
 
-@njit(**JIT)
-def _slopes(w, t, omega, pen, pl, pen_p, gap, kh, ch, sd, sr, D, S):
-    """Each surface's dF/d delta [N/m] into sd and dF/d rate [N s/m] into sr at (w, t)."""
-    sn, cs = math.sin(omega * t), math.cos(omega * t)
-    for s in range(S):
-        d = _dot_re(pen, s, w, D) + _phasor(pen_p[s], sn, cs) - gap[s]
-        r = _dot_re(pl, s, w, D) + omega * _phasor(pen_p[s], cs, -sn)
-        sd[s], sr[s] = hertz.slopes(kh[s], d, r, ch[s])
-
-
-# (_pushed, _slopes and _explicit are compiled once, not inlined into each of their four
-# calls a sub-step: inlined, the modal engine's compile took 70 % longer)
+# (_pushed is compiled once, not inlined into each of its four calls a sub-step: inlined,
+# the modal engine's compile took 70 % longer)
 @njit(**JIT)
 def _pushed(sd, sr, xd, xr, pen, pl, inp, v, g, df, D, S):
     """g (2, D, m) = sum_s inp_s dF_s: how the forces' change along each tangent of v
@@ -473,46 +460,55 @@ def _axpy(e, x, h, y, out, k, m):
 
 
 @njit(**JIT)
-def _explicit(t, omega, pen_p, xd, xr, timed, S):
-    """The rates [m/s] (into xd) and their rates [m/s^2] (into xr) at which each surface's
-    penetration and rate change with t alone, the state held (the forcing's linear steady
-    state); 0 unless ``timed``."""
-    sn, cs = math.sin(omega * t), math.cos(omega * t)
-    for s in range(S):
-        xd[s] = omega * _phasor(pen_p[s], cs, -sn) if timed else 0.0
-        xr[s] = -omega * omega * _phasor(pen_p[s], sn, cs) if timed else 0.0
+def _stage_slopes(z, w2, w3, w4, t, tau, omega, pen, pl, pen_p, gap, kh, ch, slope, timing,
+                  D, S):
+    """What the tangents take along _lawson's step of length tau [s] from z at t, whose
+    stages it left in w2, w3, w4, into ``slope`` (16, S): each surface's dF/d delta [N/m]
+    and dF/d rate [N s/m] at the four stages (rows 0-7, in pairs); with ``timing``, the
+    rates [m/s] and their rates [m/s^2] at which its penetration and rate change with t
+    alone, the state held (the forcing's linear steady state), at t, t + tau/2 and t + tau
+    (rows 8-13). Rows 14 and 15 stay 0: those of a tangent that is not a shift in time."""
+    for i in range(3):
+        ti = t + 0.5 * i * tau
+        sn, cs = math.sin(omega * ti), math.cos(omega * ti)
+        for q in range(2 if i == 1 else 1):  # (stages 2 and 3 share t + tau/2)
+            w = z if i == 0 else (w4 if i == 2 else (w2 if q == 0 else w3))
+            row = 0 if i == 0 else (6 if i == 2 else 2 + 2 * q)
+            for s in range(S):
+                d = _dot_re(pen, s, w, D) + _phasor(pen_p[s], sn, cs) - gap[s]
+                r = _dot_re(pl, s, w, D) + omega * _phasor(pen_p[s], cs, -sn)
+                slope[row, s], slope[row + 1, s] = hertz.slopes(kh[s], d, r, ch[s])
+        if timing:
+            for s in range(S):
+                slope[8 + 2 * i, s] = omega * _phasor(pen_p[s], cs, -sn)
+                slope[9 + 2 * i, s] = -omega * omega * _phasor(pen_p[s], sn, cs)
 
 
 @njit(**JIT)
-def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, timed, omega, pen, pl, pen_p, inp,
-                     gap, kh, ch, slope, work, df, D, S):
-    """The tangents ``tan`` (2, D, m) carried along _lawson's step of length tau [s] from z
-    at t, whose stages it left in w2, w3, w4 (e1, eh: exp(lam tau), exp(lam tau / 2)): the
-    same RK4 on the variational equations, so that the tangents are the derivative of
-    the step with its lengths held; with ``timed``, the step's derivative by a shift of
-    its start time, the state's change ``tan`` (the stages' explicit times move too).
-    ``slope`` (16, S), ``work`` (4, 2, D, m) and ``df`` (S, m) are room."""
+def _lawson_tangents(tan, tau, e1, eh, slope, x, pen, pl, inp, work, df, D, S):
+    """The tangents ``tan`` (2, D, m) carried along _lawson's step of length tau [s] (e1,
+    eh: exp(lam tau), exp(lam tau / 2)), its stages' slopes in ``slope`` (_stage_slopes):
+    the same RK4 on the variational equations, so that the tangents are the derivative of
+    the step with its lengths held. ``x``: the first of the rows of the explicit rates, 8
+    for the state's change by a shift of the step's start time (the stages' explicit
+    times move too), 14 (zeros) for the others. ``work`` (4, 2, D, m) and ``df`` (S, m)
+    are room."""
     m = tan.shape[2]
     hh, h6 = 0.5 * tau, tau / 6.0
-    _slopes(z, t, omega, pen, pl, pen_p, gap, kh, ch, slope[0], slope[1], D, S)
-    _slopes(w2, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[2], slope[3], D, S)
-    _slopes(w3, t + hh, omega, pen, pl, pen_p, gap, kh, ch, slope[4], slope[5], D, S)
-    _slopes(w4, t + tau, omega, pen, pl, pen_p, gap, kh, ch, slope[6], slope[7], D, S)
-    _explicit(t, omega, pen_p, slope[8], slope[9], timed, S)
-    _explicit(t + hh, omega, pen_p, slope[10], slope[11], timed, S)
-    _explicit(t + tau, omega, pen_p, slope[12], slope[13], timed, S)
+    # (the explicit rates at t, t + tau/2 and t + tau; the same zero rows where x = 14)
+    x0, x1, x2 = x, x + 2 * (x < 14), x + 4 * (x < 14)
     g, u, g2, o = work[0], work[1], work[2], work[3]
-    _pushed(slope[0], slope[1], slope[8], slope[9], pen, pl, inp, tan, g, df, D, S)
+    _pushed(slope[0], slope[1], slope[x0], slope[x0 + 1], pen, pl, inp, tan, g, df, D, S)
     for k in range(D):
         _axpy(eh[k], tan, hh, g, u, k, m)
         _axpy(e1[k], tan, h6, g, o, k, m)
-    _pushed(slope[2], slope[3], slope[10], slope[11], pen, pl, inp, u, g2, df, D, S)
+    _pushed(slope[2], slope[3], slope[x1], slope[x1 + 1], pen, pl, inp, u, g2, df, D, S)
     for k in range(D):
         _axpy(eh[k], tan, 0.0, g, u, k, m)
         for c in range(m):
             u[0, k, c] += hh * g2[0, k, c]
             u[1, k, c] += hh * g2[1, k, c]
-    _pushed(slope[4], slope[5], slope[10], slope[11], pen, pl, inp, u, g, df, D, S)
+    _pushed(slope[4], slope[5], slope[x1], slope[x1 + 1], pen, pl, inp, u, g, df, D, S)
     for k in range(D):
         _axpy(eh[k], g, 0.0, g, u, k, m)  # (eh g3, times tau below)
         er, ei = e1[k].real, e1[k].imag
@@ -524,11 +520,25 @@ def _lawson_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, timed, omega, pen, pl, 
         for c in range(m):
             o[0, k, c] += g2[0, k, c]
             o[1, k, c] += g2[1, k, c]
-    _pushed(slope[6], slope[7], slope[12], slope[13], pen, pl, inp, u, g, df, D, S)
+    _pushed(slope[6], slope[7], slope[x2], slope[x2 + 1], pen, pl, inp, u, g, df, D, S)
     for k in range(D):
         for c in range(m):
             tan[0, k, c] = o[0, k, c] + h6 * g[0, k, c]
             tan[1, k, c] = o[1, k, c] + h6 * g[1, k, c]
+
+
+@njit(**JIT)
+def _step_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, shifted, timing, omega, pen, pl,
+                   pen_p, inp, gap, kh, ch, slope, work, df, shift_work, shift_df, D, S):
+    """The tangents ``tan`` along _lawson's step (_lawson_tangents), and with ``timing``
+    the state's change by a shift of the contact's start, ``shifted`` (2, D, 1), too; the
+    stages' slopes taken once for both."""
+    _stage_slopes(z, w2, w3, w4, t, tau, omega, pen, pl, pen_p, gap, kh, ch, slope, timing,
+                  D, S)
+    _lawson_tangents(tan, tau, e1, eh, slope, 14, pen, pl, inp, work, df, D, S)
+    if timing:
+        _lawson_tangents(shifted, tau, e1, eh, slope, 8, pen, pl, inp, shift_work, shift_df,
+                         D, S)
 
 
 @njit(**JIT)
@@ -658,12 +668,13 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
     e1, eh = np.empty(D, np.complex128), np.empty(D, np.complex128)
     stages = np.empty((3, S))
     tangents = tan.shape[2] > 0
-    slope, work = np.empty((16, S)), np.empty((4, 2, D, tan.shape[2]))
-    df = np.empty((S, tan.shape[2]))
+    # (room for the tangents' steps, empty where there are none)
+    m, m1 = tan.shape[2], 1 if tangents else 0
+    slope, work, df = np.zeros((16 * m1, S)), np.empty((4, 2, D, m)), np.empty((S, m))
     # the shift of a contact's start at a located switch (_shift): each tangent's move of
     # it [s], the state's derivative by it, and whether a contact carries one
-    moves, shifted = np.zeros(tan.shape[2]), np.zeros((2, D, 1))
-    shift_work, shift_df = np.empty((4, 2, D, 1)), np.empty((S, 1))
+    moves, shifted = np.zeros(m), np.zeros((2, D, m1))
+    shift_work, shift_df = np.empty((4, 2, D, m1)), np.empty((S, m1))
     timing = False
     t_tan = 0.0  # the time in the period the tangents have been carried to [s]
     # the bound on a surface's rise above its chord over a grid step, taken once per
@@ -833,15 +844,12 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
                     if tangents:
                         ea, eb = (e1, eh) if cut_here else (sub1[grade], subh[grade])
-                        _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, NOT_TIMED, omega, pen,
-                                         pl, pen_p, inp, gap, kh, ch, slope, work, df, D, S)
-                        if timing:
-                            _lawson_tangents(z, w2, w3, w4, t, tau, ea, eb, shifted, TIMED,
-                                             omega, pen, pl, pen_p, inp, gap, kh, ch, slope,
-                                             shift_work, shift_df, D, S)
-                            if last:  # (the period's end, a fixed time, ends the shift)
-                                _shift(lam, zn, shifted, tan, moves, inp, F, D, S)
-                                timing = False
+                        _step_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, shifted, timing,
+                                       omega, pen, pl, pen_p, inp, gap, kh, ch, slope, work,
+                                       df, shift_work, shift_df, D, S)
+                        if timing and last:  # (the period's end, a fixed time, ends the shift)
+                            _shift(lam, zn, shifted, tan, moves, inp, F, D, S)
+                            timing = False
                         t_tan = t + tau
                     z[:] = zn
                     t += tau
@@ -881,12 +889,10 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         blown = True
                         break
                     if tangents:  # (along the last sub-step the secant steps computed)
-                        _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, NOT_TIMED, omega, pen,
-                                         pl, pen_p, inp, gap, kh, ch, slope, work, df, D, S)
+                        _step_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, shifted, timing,
+                                       omega, pen, pl, pen_p, inp, gap, kh, ch, slope, work,
+                                       df, shift_work, shift_df, D, S)
                         if timing:  # (the force is off: the free flow takes over)
-                            _lawson_tangents(z, w2, w3, w4, t, ts, e1, eh, shifted, TIMED,
-                                             omega, pen, pl, pen_p, inp, gap, kh, ch, slope,
-                                             shift_work, shift_df, D, S)
                             _shift(lam, zn, shifted, tan, moves, inp, zero, D, S)
                             timing = False
                         t_tan = t + ts
