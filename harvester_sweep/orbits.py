@@ -84,6 +84,7 @@ from .period_map import (
     FORWARD,
     PERTURBATION,
     ROUNDING,
+    carries_tangents,
     copies_monodromy,
     free_monodromy_into,
     perturb,
@@ -451,12 +452,27 @@ def _rounds(T, threads, one):
 
 
 @njit(inline="always", **SOLVER_JIT)
+def _carries(T, i):
+    """Whether point i's runs can carry their monodromy along (the variational equations,
+    see _engine.tangents) rather than take it by copies."""
+    return T.components.shape[2] == N_RIGID and carries_tangents(T.rows[i])
+
+
+@njit(inline="always", **SOLVER_JIT)
+def _tangents(T, i):
+    """Whether point i's next run carries its monodromy along: a Newton iterate's that is
+    not a chord step, where the engine can."""
+    return (T.counts[i, _COUNT.phase] == _NEWTON and not T.flags[i, _FLAG.chord]
+            and _carries(T, i))
+
+
+@njit(inline="always", **SOLVER_JIT)
 def _lanes(T, i):
-    """Lanes of point i's next run: 0 for none, 1 alone, or with its copies (forward
-    ones, or central ones both ways)."""
+    """Lanes of point i's next run: 0 for none, 1 alone (with its tangents or not), or
+    with its copies (forward ones, or central ones both ways)."""
     phase = T.counts[i, _COUNT.phase]
     if phase == _NEWTON:
-        if T.flags[i, _FLAG.chord]:
+        if T.flags[i, _FLAG.chord] or _tangents(T, i):
             return 1
         return 1 + T.components.shape[2] * (2 if T.flags[i, _FLAG.central] else 1)
     return 1 if phase == _TRANSIENT or phase == _ESTIMATE else 0
@@ -468,8 +484,10 @@ def _round(T, threads):
     the number of points that finished."""
     n, _, size = T.components.shape
     first = np.zeros(n + 1, dtype=np.int64)
+    tangent = np.zeros(n, dtype=np.bool_)
     for i in range(n):
         first[i + 1] = first[i] + _lanes(T, i)
+        tangent[i] = _tangents(T, i)
     total = first[n]
     params = np.empty((total, T.rows.shape[1]))
     states = np.empty((total, T.states.shape[2]))
@@ -494,6 +512,7 @@ def _round(T, threads):
             states[k + w] = start
             if w > 0:  # (the copies book no extrema: their end states alone are read)
                 params[k + w, PARAM.book] = 0.0
+        params[k, PARAM.tangents] = 1.0 if tangent[i] else 0.0
         if width == 1 + size:  # copies, each moved along one component by its scale
             perturb(states[k:k + width], T.components[i, _COMPONENTS.scale], FORWARD)
         elif width > 1:
@@ -503,7 +522,8 @@ def _round(T, threads):
     # (the engine's steady-state test ends a piece of the motion that settles; it never
     # ends a Newton or estimate run, whose p <= MAX_ORBIT_PERIOD periods are fewer than
     # the SAMPLES periods the test waits for)
-    run_lanes(params, states, metrics, strobes, threads)
+    derivatives = np.empty((total, N_RIGID, N_RIGID))
+    run_lanes(params, states, metrics, strobes, threads, derivatives)
     before = 0
     for i in range(n):
         before += T.counts[i, _COUNT.phase] == _DONE
@@ -520,6 +540,9 @@ def _round(T, threads):
             ok = ok and sane_run(metrics[k + w])
             for c in range(size):
                 ok = ok and np.isfinite(states[k + w, c])
+                if tangent[i]:
+                    for r in range(size):
+                        ok = ok and np.isfinite(derivatives[k, r, c])
         _book_work(T, i, params, metrics, k, width)
         m, end, strobe = metrics[k], states[k], strobes[k]
         if T.counts[i, _COUNT.phase] == _NEWTON:
@@ -537,6 +560,11 @@ def _round(T, threads):
                     T.flags[i, _FLAG.central] = False
                     if T.counts[i, _COUNT.refine] > 0:
                         T.reals[i, _REAL.last] = np.inf
+            elif tangent[i]:  # (judges an orbit as central differences would, more nearly)
+                jac[:] = derivatives[k]
+                T.flags[i, _FLAG.affine] = not _touched(T.rows[i], m)
+                T.flags[i, _FLAG.exact] = True
+                T.flags[i, _FLAG.central] = False
             else:
                 jac[:] = T.jacobians[i, _JACOBIANS.newton_jacobian]
             phases[i] = _newton(T, i, m, end, strobe, jac, ok)
@@ -780,7 +808,11 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
         T.states[i, _STATES.y, size:] = centre[size:]
         T.counts[i, _COUNT.iteration] += 1
         T.reals[i, _REAL.last] = size_
-        T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.affine] or size_ <= CHORD
+        # (where the monodromy is carried along, an iterate near the last has it for about
+        # one more period's cost, and a fixed point the monodromy of its own run, not one
+        # taken CHORD away: near grazing that one can be 2e-4 off)
+        T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.affine] or (size_ <= CHORD
+                                                               and not _carries(T, i))
         # (an iterate this near is likely the orbit: its copies run both ways at once)
         T.flags[i, _FLAG.central] = not T.flags[i, _FLAG.chord] and size_ <= LAST_STEP
     if converged:  # a fixed point; taken or not

@@ -199,15 +199,25 @@ def copies_monodromy(ends, scale, central, out):
 
 
 @njit(**SOLVER_JIT)
-def run_lanes(params, states, metrics, strobes, most):
+def run_lanes(params, states, metrics, strobes, most, derivatives):
     """Run independent points (parameter rows ``params``, ``states`` updated in place,
     outputs ``metrics`` and ``strobes`` as the engine's) in one engine call from compiled
     code, on at most ``most`` threads, the engine's steady-state test on (it never ends a
-    run of MAX_ORBIT_PERIOD periods or fewer)."""
+    run of MAX_ORBIT_PERIOD periods or fewer). A point whose row has PARAM.tangents set,
+    and that can carry them (:func:`carries_tangents`), gets its run's monodromy (D, D) in
+    ``derivatives[i]``, from the variational equations of its steps."""
     # (a bool, not the literal True: numba compiles a function again for each literal
     # value it is called with, and the engine's queue is compiled for a bool already, by
     # the calls from Python)
-    _engine.run_independent(params, states, metrics, strobes, np.bool_(True), most)
+    _engine.run_independent(params, states, metrics, strobes, np.bool_(True), most,
+                            derivatives)
+
+
+@njit(**SOLVER_JIT)
+def carries_tangents(row):
+    """Whether a run of packed row ``row`` can carry its monodromy along (PARAM.tangents):
+    switches located, rigid stops, a fixed approach velocity."""
+    return _engine.carries_tangents(row)
 
 
 @njit(**SOLVER_JIT)

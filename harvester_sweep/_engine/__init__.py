@@ -16,6 +16,7 @@ final states. One concept per module:
 - ``booking``: what a step finished in scalar code books (touches, extrema, force peaks);
 - ``stop_motion``: a stop on a spring, stepped in scalar code;
 - ``monodromy``: the period map clear of the stops (its Jacobian, its reach), in closed form;
+- ``tangents``: the period map's Jacobian carried along a run (the variational equations);
 - ``lanes``: the lane table, its vector step loop and the scalar finish of marked steps;
 - ``scheduler``: lines, the shared queue, threads and progress (:func:`run_points`);
 - ``cache``: numba's on-disk cache kept in step with this source.
@@ -30,7 +31,18 @@ import os
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 from ..models import hertz, tip_mass
-from . import booking, cache, hermite, lanes, monodromy, rk4, scheduler, steady, stop_motion
+from . import (
+    booking,
+    cache,
+    hermite,
+    lanes,
+    monodromy,
+    rk4,
+    scheduler,
+    steady,
+    stop_motion,
+    tangents,
+)
 from .layouts import (
     BOOKED_METRICS,
     LANE,
@@ -47,10 +59,11 @@ from .layouts import (
 from .monodromy import free_extent, free_monodromy
 from .scheduler import record_series, run_independent, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
+from .tangents import carried as carries_tangents
 
 cache.flush_if_changed(scheduler._run_threads, (booking, hermite, lanes, monodromy, rk4,
-                                                 scheduler, steady, stop_motion, hertz,
-                                                 tip_mass))
+                                                 scheduler, steady, stop_motion, tangents,
+                                                 hertz, tip_mass))
 
 
 def cache_warm() -> bool:
@@ -72,6 +85,7 @@ __all__ = [
     "STATE",
     "STATUS",
     "cache_warm",
+    "carries_tangents",
     "free_extent",
     "free_monodromy",
     "record_series",

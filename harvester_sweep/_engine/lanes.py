@@ -31,7 +31,7 @@ from ..models.tip_mass import (
     rk4,
     voltage_rate,
 )
-from . import booking, hermite, steady, stop_motion
+from . import booking, hermite, steady, stop_motion, tangents
 from .layouts import (
     ACC,
     BLOCK,
@@ -46,7 +46,7 @@ from .layouts import (
     STATE,
     STATUS,
 )
-from .rk4 import GRADED, WHOLE, pieces, switch_step
+from .rk4 import GRADED, WHOLE, pieces, switch_step, switch_tangents
 from .steady import MAX_ORBIT_PERIOD
 
 # Steps between exact resets of the forcing rotation, whose rounding drifts: at every
@@ -140,6 +140,8 @@ def load(L, j, p, y, it):
     L[LANE.stop_x + j], L[LANE.stop_v + j] = xs, vs
     L[LANE.stop_wn2 + j], L[LANE.stop_cm + j] = p[PARAM.stop_wn2], p[PARAM.stop_cm]
     L[LANE.stop_ratio + j] = p[PARAM.stop_ratio]
+    L[LANE.tangents + j] = 1.0 if p[PARAM.tangents] != 0.0 and tangents.carried(p) else 0.0
+    tangents.start(L, j, it)  # (mirrored below with the state)
     if moving:
         L[LANE.flip_below + j] = np.inf
     elif x < L[LANE.flip_below + j]:
@@ -186,9 +188,10 @@ def _start_period(L, j, it):
 
 
 # Rows that change sign when a lane mirrors: the state, the forcing, the contact-free map's
-# forcing columns and the mirror's own threshold.
+# forcing columns, the mirror's own threshold and the state's derivative (tangents).
 _NEGATED = (LANE.x, LANE.v, LANE.voltage, LANE.amplitude, LANE.mxs, LANE.mxc, LANE.mvs,
-            LANE.mvc, LANE.mes, LANE.mec, LANE.flip_below)
+            LANE.mvc, LANE.mes, LANE.mec, LANE.flip_below) + tuple(
+                range(LANE.txx, LANE.tee + LANES, LANES))
 # Rows of the stop in use and of the other one, swapped when a lane mirrors.
 _SWAPPED = ((LANE.gap, LANE.gap_other), (LANE.kh, LANE.kh_other), (LANE.khm, LANE.khm_other),
             (LANE.ch, LANE.ch_other), (LANE.latch, LANE.latch_other),
@@ -269,6 +272,15 @@ def _increment(L, row, x, v, V, s0, c0):
     (x, v, V, sin, cos)."""
     return (L[row] * x + L[row + LANES] * v + L[row + 2 * LANES] * V + L[row + 3 * LANES] * s0
             + L[row + 4 * LANES] * c0)
+
+
+@njit(inline="always", **JIT)
+def _half_phases(s0, c0, ca, sa):
+    """sin of the forcing phase half a step and a step on from sin, cos = s0, c0, by
+    rotating it by the half step's cos, sin = ca, sa, for scalar code: the lane loop
+    writes the same rotation out (see _eighth_phases)."""
+    sm = s0 * ca + c0 * sa
+    return sm, sm * ca + (c0 * ca - s0 * sa) * sa
 
 
 @njit(inline="always", **JIT)
@@ -450,6 +462,41 @@ def quarter_steps(L, lanes):
 
 
 @njit(inline="always", **JIT)
+def _eighth_phases(s0, c0, ce, se):
+    """sin of the forcing phase 1, 2, ..., 8 eighths of a step on from sin, cos = s0, c0,
+    by rotating it by an eighth's cos, sin = ce, se, for scalar code. The vector code
+    writes the same rotations out (_quarter_block, _trial_steps): with this helper called
+    in _quarter_block, the same points run twice on 2 threads came out with different
+    bits now and then (their lanes' neighbours differ from run to run)."""
+    s1, c1 = s0 * ce + c0 * se, c0 * ce - s0 * se
+    s2, c2 = s1 * ce + c1 * se, c1 * ce - s1 * se
+    s3, c3 = s2 * ce + c2 * se, c2 * ce - s2 * se
+    s4, c4 = s3 * ce + c3 * se, c3 * ce - s3 * se
+    s5, c5 = s4 * ce + c4 * se, c4 * ce - s4 * se
+    s6, c6 = s5 * ce + c5 * se, c5 * ce - s5 * se
+    s7, c7 = s6 * ce + c6 * se, c6 * ce - s6 * se
+    return s1, s2, s3, s4, s5, s6, s7, s7 * ce + c7 * se
+
+
+@njit(**JIT)
+def _quarter_tangents(L, j, x, v, V, s0, c0):
+    """Carry lane ``j``'s tangents through the four quarter steps from (x, v, V) that
+    quarter_steps took (the same arguments, in scalar code)."""
+    A, dt = L[LANE.amplitude + j], 0.25 * L[LANE.h + j]
+    s1, s2, s3, s4, s5, s6, s7, s8 = _eighth_phases(s0, c0, L[LANE.cos_eighth + j],
+                                                    L[LANE.sin_eighth + j])
+    coef = Coefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j], L[LANE.khm + j],
+                        L[LANE.gap + j], L[LANE.ch + j], L[LANE.irc + j], L[LANE.thc + j])
+    tangents.through_step(L, j, x, v, V, dt, A * s0, A * s1, A * s2, coef)
+    x, v, V, _, _ = rk4(x, v, V, dt, A * s0, A * s1, A * s2, coef)
+    tangents.through_step(L, j, x, v, V, dt, A * s2, A * s3, A * s4, coef)
+    x, v, V, _, _ = rk4(x, v, V, dt, A * s2, A * s3, A * s4, coef)
+    tangents.through_step(L, j, x, v, V, dt, A * s4, A * s5, A * s6, coef)
+    x, v, V, _, _ = rk4(x, v, V, dt, A * s4, A * s5, A * s6, coef)
+    tangents.through_step(L, j, x, v, V, dt, A * s6, A * s7, A * s8, coef)
+
+
+@njit(inline="always", **JIT)
 def _quarter_block(L, b):
     """Four quarter steps of the packed lanes b, ..., b + BLOCK - 1 (see quarter_steps),
     with the forcing every eighth of a step by rotating the phase; written out, as LLVM
@@ -499,14 +546,16 @@ def finish_step(L, j, it):
     if L[LANE.stop_ratio + j] > 0.0:
         stop_motion.step(L, j)
     else:
-        _finish_rigid(L, j)
+        _finish_rigid(L, j, it)
     return _next_phase(L, j, it, s0, c0)
 
 
 @njit(inline="always", **JIT)
-def _finish_rigid(L, j):
-    """finish_step with a rigid stop: the step redone where it switches contact or needs
-    quarter steps, its extrema and force peak placed, the lane mirrored past half way."""
+def _finish_rigid(L, j, it):
+    """finish_step with a rigid stop, in iteration ``it``: the step redone where it
+    switches contact or needs quarter steps, its extrema and force peak placed, the lane
+    mirrored past half way; a lane that carries tangents carries them through a step that
+    is not contact-free (see tangents)."""
     x, v, V, s0, c0 = _state(L, j)
     on, ch = L[LANE.on + j], L[LANE.ch + j]
     xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
@@ -526,6 +575,7 @@ def _finish_rigid(L, j):
     )
     n_steps = L[LANE.steps + j]
     fine = L[LANE.fine + j]
+    carry = L[LANE.tangents + j] != 0.0
     dV = voltage_rate(V, v, irc, thc)  # at the start of the step [V/s]
     # int V^2 dt over the trial step as the lane loop takes it (see _commit_steps), unless
     # the step is redone below
@@ -591,8 +641,20 @@ def _finish_rigid(L, j):
         )
         dq = q1 + q2
         fine = 3.0 if onset else 0.0
+        if carry:
+            tangents.catch_up(L, j, it)
+            switch_tangents(L, j, x, v, V, xe, ve, Ve, kind, theta,
+                            GRADED if graded else WHOLE, GRADED if onset else WHOLE,
+                            s0, c0, n_steps, h, A, before, after)
+            L[LANE.t_since + j] = it + 1.0
     elif _quarter(L, j):  # the trial step was taken in quarter steps (quarter_steps)
         fine = max(fine - 1.0, 0.0)
+        if carry:
+            tangents.catch_up(L, j, it)
+            _quarter_tangents(L, j, x, v, V, s0, c0)
+            L[LANE.t_since + j] = it + 1.0
+    elif carry and on == 1.0:  # a plain step in contact
+        _contact_step_tangents(L, j, it, x, v, V, s0, c0)
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
     booking.extrema(L, j, x, v, V, dV, xn, vn, Vn, voltage_rate(Vn, vn, irc, thc), h, fcp, fc,
@@ -603,6 +665,45 @@ def _finish_rigid(L, j):
     L[LANE.q + j] += dq
     if xn < L[LANE.flip_below + j]:  # nearer the other stop (out of this one's reach)
         mirror(L, j)
+
+
+@njit(**JIT)
+def _contact_step_tangents(L, j, it, x, v, V, s0, c0):
+    """Carry lane ``j``'s tangents through its plain step in contact of iteration ``it``
+    from (x, v, V) at forcing phase sin, cos = s0, c0 (the lane loop's trial step)."""
+    tangents.catch_up(L, j, it)
+    sm, s1 = _half_phases(s0, c0, L[LANE.cos_half + j], L[LANE.sin_half + j])
+    A = L[LANE.amplitude + j]
+    tangents.through_step(L, j, x, v, V, L[LANE.h + j], A * s0, A * sm, A * s1, Coefficients(
+        L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j], L[LANE.khm + j], L[LANE.gap + j],
+        L[LANE.ch + j], L[LANE.irc + j], L[LANE.thc + j]))
+    L[LANE.t_since + j] = it + 1.0
+
+
+@njit(**JIT)
+def keep_starts(L, lanes):
+    """Keep the state at the start of this iteration's step of each of the first ``lanes``
+    lanes that carries tangents and is in contact: the lane loop commits a plain step in
+    contact as it does for any lane (the same bits), and carry_tangents carries the
+    tangents through it from there. (Not in the lane loop itself: a row more written
+    there changed how LLVM compiled it, and a lane's bits came to depend on its
+    neighbours.)"""
+    for j in range(lanes):
+        if L[LANE.tangents + j] != 0.0 and L[LANE.on + j] == 1.0:
+            L[LANE.t_x + j], L[LANE.t_v + j] = L[LANE.x + j], L[LANE.v + j]
+            L[LANE.t_voltage + j] = L[LANE.voltage + j]
+            L[LANE.t_sin + j], L[LANE.t_cos + j] = L[LANE.sin + j], L[LANE.cos + j]
+
+
+@njit(**JIT)
+def carry_tangents(L, lanes, it):
+    """Carry the tangents of each of the first ``lanes`` lanes that keep_starts kept
+    through its step of iteration ``it``, where the lane loop committed it (not marked for
+    finish_step, which carries them through the steps it takes)."""
+    for j in range(lanes):
+        if L[LANE.tangents + j] != 0.0 and L[LANE.on + j] == 1.0 and L[LANE.need + j] == 0.0:
+            _contact_step_tangents(L, j, it, L[LANE.t_x + j], L[LANE.t_v + j],
+                                   L[LANE.t_voltage + j], L[LANE.t_sin + j], L[LANE.t_cos + j])
 
 
 @njit(inline="always", **JIT)
@@ -741,6 +842,7 @@ def idle(L, j):
     L[LANE.sign + j], L[LANE.flip_below + j] = 1.0, -np.inf
     L[LANE.stop_ratio + j], L[LANE.stop_on + j] = 0.0, 0.0
     L[LANE.stop_x + j], L[LANE.stop_v + j] = 0.0, 0.0
+    L[LANE.tangents + j] = 0.0
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = 0.0, 1.0, 1.0
     for r in range(LANE.mxx, LANE.mec + LANES, LANES):
         L[r + j] = 0.0

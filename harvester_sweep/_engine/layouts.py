@@ -70,6 +70,8 @@ PARAM = layout("ParameterRow", (
     ("stop_ratio", "m/m_s, tip mass over stop mass; 0: a rigid stop [-]"),
     ("book", "1: every metric booked; 0: only the power, impacts and end state (see "
              "BOOKED_METRICS) [-]"),
+    ("tangents", "1: the run carries the derivative of its end state by its start state, "
+                 "the monodromy (lanes that can: tangents.carried), 0: not [-]"),
 ))
 #: PARAM.lower_gap of a point without a lower stop [m]: far beyond any motion, finite
 #: (the kernel's arithmetic stays finite).
@@ -239,4 +241,17 @@ LANE = layout("LaneTable", (
     ("stop_wn2", "k_s/m_s [1/s^2]"), ("stop_cm", "c_s/m_s [1/s]"),
     ("stop_ratio", "m/m_s; 0: rigid stop"),
     ("stop_x_max", "largest |x_s| over the period [m]"),
+    # ... and the derivative of the state by the run's start state (tangents): its entry
+    # (r, c), the change of component r from a change of component c at the start, in
+    # the row LANE.txx + (3 r + c) LANES, the contact-free steps since t_since not yet
+    # carried into it.
+    ("tangents", "1: the lane carries the derivative of its state by its start state"),
+    ("t_since", "iteration of the first contact-free step not yet in the derivative"),
+    ("t_x", "x at the start of a plain step in contact, for its derivative [m]"),
+    ("t_v", "v at its start [m/s]"), ("t_voltage", "V at its start [V]"),
+    ("t_sin", "sin of the forcing phase at its start"),
+    ("t_cos", "cos of the forcing phase at its start"),
+    ("txx", ""), ("txv", ""), ("txe", ""),
+    ("tvx", ""), ("tvv", ""), ("tve", ""),
+    ("tex", ""), ("tev", ""), ("tee", ""),
 ), stride=LANES)

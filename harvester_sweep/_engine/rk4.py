@@ -13,21 +13,36 @@ import numpy as np
 
 from ..jit import JIT, njit
 from ..models import hertz
-from ..models.tip_mass import Coefficients, derivatives, rk4
-from . import hermite
+from ..models.tip_mass import Coefficients, derivatives, rk4, rk4_moved, rk4_slopes, rk4_tangent
+from . import hermite, tangents
 
 
 @njit(inline="always", **JIT)
-def forcing(A, s0, c0, d):
-    """A sin(phi_0 + d) [m/s^2] from s0, c0 = sin, cos of the step's start phase phi_0 and
-    Taylor series in the offset d [rad]; |d| <= 2 pi / 16 (16 steps per period at least),
-    where it is within 2e-15 A of A sin (rounding included)."""
+def _offset(d):
+    """sin d, cos d by Taylor series in the offset d [rad]; |d| <= 2 pi / 16 (16 steps per
+    period at least), where each is within 2e-15 of sin, cos (rounding included)."""
     d2 = d * d
     sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0 * (1.0 - d2 / 72.0 * (
         1.0 - d2 / 110.0)))))
     cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0 * (
         1.0 - d2 / 90.0 * (1.0 - d2 / 132.0)))))
+    return sd, cd
+
+
+@njit(inline="always", **JIT)
+def forcing(A, s0, c0, d):
+    """A sin(phi_0 + d) [m/s^2] from s0, c0 = sin, cos of the step's start phase phi_0 and
+    the offset d [rad] (:func:`_offset`)."""
+    sd, cd = _offset(d)
     return A * (s0 * cd + c0 * sd)
+
+
+@njit(inline="always", **JIT)
+def _forcing_rate(A, s0, c0, d, w):
+    """d/dt (A sin(phi_0 + d)) [m/s^3] at forcing angular frequency w [rad/s] (as
+    :func:`forcing`)."""
+    sd, cd = _offset(d)
+    return A * w * (c0 * cd - s0 * sd)
 
 
 @njit(inline="always", **JIT)
@@ -43,10 +58,11 @@ WHOLE = np.array([1.0])
 
 
 @njit(**JIT)
-def pieces(x, v, V, start, length, fractions, reverse, s0, c0, n_steps, h, A, k):
+def pieces(x, v, V, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, L=None, j=0):
     """RK4 over the fraction [start, start + length] of a step of h [s] whose forcing phase
     starts at sin, cos = s0, c0, in sub-steps of the given ``fractions`` of ``length`` (in
-    reverse order when ``reverse``). Returns x, v, V, int V^2 dt."""
+    reverse order when ``reverse``). Returns x, v, V, int V^2 dt. With a lane table ``L``,
+    lane ``j``'s tangents are carried through the sub-steps too (tangents)."""
     w = math.pi / n_steps  # forcing phase per half step
     q = 0.0
     at = start
@@ -56,8 +72,10 @@ def pieces(x, v, V, start, length, fractions, reverse, s0, c0, n_steps, h, A, k)
         piece = fractions[n - 1 - i] if reverse else fractions[i]
         dt = piece * length
         f1 = forcing(A, s0, c0, 2.0 * w * (at + dt))
-        x, v, V, dq, _ = rk4(x, v, V, dt * h, f0, forcing(A, s0, c0, w * (2.0 * at + dt)),
-                             f1, k)
+        fm = forcing(A, s0, c0, w * (2.0 * at + dt))
+        if L is not None:
+            tangents.through_step(L, j, x, v, V, dt * h, f0, fm, f1, k)
+        x, v, V, dq, _ = rk4(x, v, V, dt * h, f0, fm, f1, k)
         q += dq
         at += dt
         f0 = f1
@@ -118,3 +136,92 @@ def switch_step(x, v, V, a0, xn, vn, Vn, s0, c0, n_steps, h, A, k):
             return kind, theta, True, xe, ve, Ve, qe
         theta = min(max(theta - step, 0.0), 1.0)
     return kind, theta, False, xe, ve, Ve, qe
+
+
+@njit(**JIT)
+def _pieces_rate(x, v, V, start, length, fractions, reverse, s0, c0, n_steps, h, A, k,
+                 dstart, dlength):
+    """The rate of the end state of :func:`pieces` (the same arguments) [m, m/s, V per unit]
+    where its start moves by ``dstart`` and its length by ``dlength`` (fractions of the
+    step) per unit: the sub-steps' RK4 stages differentiated by their times and lengths."""
+    w = math.pi / n_steps
+    omega = 2.0 * w / h  # [rad/s]
+    dx = dv = dV = 0.0
+    at, moved = start, dstart  # a sub-step's start and its rate [fractions of the step]
+    n = fractions.shape[0]
+    for i in range(n):
+        piece = fractions[n - 1 - i] if reverse else fractions[i]
+        dt = piece * length
+        f0, fm, f1 = (forcing(A, s0, c0, 2.0 * w * at), forcing(A, s0, c0, w * (2.0 * at + dt)),
+                      forcing(A, s0, c0, 2.0 * w * (at + dt)))
+        r0, rm, r1 = (_forcing_rate(A, s0, c0, 2.0 * w * at, omega),
+                      _forcing_rate(A, s0, c0, w * (2.0 * at + dt), omega),
+                      _forcing_rate(A, s0, c0, 2.0 * w * (at + dt), omega))
+        dx, dv, dV = rk4_moved(x, v, V, dt * h, f0, fm, f1, r0, rm, r1, k, dx, dv, dV,
+                               moved * h, piece * dlength * h)
+        x, v, V, _, _ = rk4(x, v, V, dt * h, f0, fm, f1, k)
+        at += dt
+        moved += piece * dlength
+    return dx, dv, dV
+
+
+@njit(inline="always", **JIT)
+def _normal_change(L, j, c, slopes, dt, k, ex, ev):
+    """The change along the normal (ex, ev) of a switch's surface of lane ``j``'s tangent
+    ``c`` carried through an RK4 step of dt [s] with the stages' force slopes ``slopes``
+    (tip_mass.rk4_slopes)."""
+    dx, dv, _ = rk4_tangent(slopes, dt, k, L[tangents.row(0, c) + j], L[tangents.row(1, c) + j],
+                            L[tangents.row(2, c) + j])
+    return ex * dx + ev * dv
+
+
+@njit(inline="always", **JIT)
+def _add_moved(L, j, gx, gv, gV, m0, m1, m2):
+    """Add to lane ``j``'s tangents the rate (gx, gv, gV) [per unit theta] times each one's
+    move of theta (m0, m1, m2)."""
+    for r, g in ((0, gx), (1, gv), (2, gV)):
+        L[tangents.row(r, 0) + j] += g * m0
+        L[tangents.row(r, 1) + j] += g * m1
+        L[tangents.row(r, 2) + j] += g * m2
+
+
+@njit(**JIT)
+def switch_tangents(L, j, x, v, V, xe, ve, Ve, kind, theta, before_fractions,
+                    after_fractions, s0, c0, n_steps, h, A, before, after):
+    """Carry lane ``j``'s tangents through a step split at a located switch (the derivative
+    of lanes._finish_rigid's step; see tangents for the rule): from (x, v, V) up to theta
+    with the contact state ``before`` in ``before_fractions`` (reversed, as
+    :func:`pieces`), reaching (xe, ve, Ve), and on with ``after`` in ``after_fractions``.
+    Where ``kind`` is a switch (hertz.TOUCH: x = g, hertz.CLIP: 1 + c_h v = 0), theta
+    moves with the start state, as the root :func:`switch_step` finds on one sub-step from
+    the start, whatever pieces then take the step up to it; the pieces' rates in theta
+    are their RK4 stages differentiated by their times and lengths (_pieces_rate)."""
+    moves = kind == hertz.TOUCH or kind == hertz.CLIP
+    m0 = m1 = m2 = rx = rv = rV = 0.0
+    if moves:
+        ex, ev = (1.0, 0.0) if kind == hertz.TOUCH else (0.0, before.ch)  # the surface's normal
+        rx, rv, rV = _pieces_rate(x, v, V, 0.0, theta, WHOLE, True, s0, c0, n_steps, h, A,
+                                  before, 0.0, 1.0)
+        rate = ex * rx + ev * rv  # the root's, on the one sub-step
+        moves = rate != 0.0
+    if moves:
+        # each tangent's move of theta, from its change along the normal on the one sub-step
+        w = math.pi / n_steps
+        f0, fm, f1 = A * s0, forcing(A, s0, c0, w * theta), forcing(A, s0, c0, 2.0 * w * theta)
+        slopes = rk4_slopes(x, v, V, theta * h, f0, fm, f1, before)
+        m0 = -_normal_change(L, j, 0, slopes, theta * h, before, ex, ev) / rate
+        m1 = -_normal_change(L, j, 1, slopes, theta * h, before, ex, ev) / rate
+        m2 = -_normal_change(L, j, 2, slopes, theta * h, before, ex, ev) / rate
+    pieces(x, v, V, 0.0, theta, before_fractions, True, s0, c0, n_steps, h, A, before, L, j)
+    if moves:  # the pieces up to theta (the one sub-step's, where they are that), ...
+        bx, bv, bV = rx, rv, rV
+        if before_fractions.shape[0] > 1:
+            bx, bv, bV = _pieces_rate(x, v, V, 0.0, theta, before_fractions, True, s0, c0,
+                                      n_steps, h, A, before, 0.0, 1.0)
+        _add_moved(L, j, bx, bv, bV, m0, m1, m2)
+    pieces(xe, ve, Ve, theta, 1.0 - theta, after_fractions, False, s0, c0, n_steps, h, A,
+           after, L, j)
+    if moves:  # ... and after it, from the same state
+        ax, av, aV = _pieces_rate(xe, ve, Ve, theta, 1.0 - theta, after_fractions, False, s0,
+                                  c0, n_steps, h, A, after, 1.0, -1.0)
+        _add_moved(L, j, ax, av, aV, m0, m1, m2)

@@ -21,7 +21,7 @@ import numpy as np
 from numba import prange
 
 from ..jit import JIT, njit
-from . import lanes
+from . import lanes, tangents
 from .atomic import fetch_add
 from .layouts import (
     ACC,
@@ -41,11 +41,14 @@ from .steady import GAP_HISTORY, MAX_ORBIT_PERIOD
 
 
 @njit(**JIT)
-def _run_queue(params, states, metrics, strobes, series, settle, queue, successors, control, b):
+def _run_queue(params, states, metrics, strobes, series, settle, queue, successors, control, b,
+               derivatives):
     """Run lines that start at the points ``queue`` (indices) to their ends, LANES at a
-    time, as thread ``b``: a lane whose point is done takes the point ``successors`` names
-    next on its line (-1: none), from the state it left, or else the next line not yet
-    taken from the queue (by any thread), so that no lane waits for the slowest point.
+    time, as thread ``b``, writing the monodromy of each point that carries tangents into
+    ``derivatives`` (see run_independent): a lane whose point is done takes the point
+    ``successors`` names next on its line (-1: none), from the state it left, or else the
+    next line not yet taken from the queue (by any thread), so that no lane waits for the
+    slowest point.
     ``control[b]`` counts the points done; ``control[-1]`` set to nonzero stops taking
     points (see _next_point)."""
     n_lanes = min(LANES, len(queue))
@@ -60,6 +63,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
     for j in range(LANES):
         lanes.idle(L, j)
     active = 0
+    carrying = 0.0  # lanes that carry tangents (lanes.keep_starts)
     for j in range(n_lanes):  # the lanes that get no point are the last ones
         pt = _next_point(params, states, metrics, strobes, successors, queue, -1, False,
                          control, b)
@@ -68,13 +72,18 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         lanes.take(L, j, params, states, pt, ring, acc, gaps, 0.0)
         point[j] = pt
         active += 1
+        carrying += L[LANE.tangents + j]
     groups = (active + GROUP - 1) // GROUP
     it = -1.0  # the iteration of the lane loop
     while active > 0:
         it += 1.0
         if n_series > 0:  # one point recorded at every step boundary
             _record(series, L, int(L[LANE.periods] * L[LANE.steps] + it - L[LANE.k0]))
+        if carrying > 0.0:
+            lanes.keep_starts(L, n_lanes)
         marked, quarters = lanes.lane_steps(L, groups, it)
+        if carrying > 0.0:
+            lanes.carry_tangents(L, n_lanes, it)
         if marked == 0:
             continue
         if quarters > 0:
@@ -94,12 +103,16 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
                 _record(series, L, int(L[LANE.periods] * L[LANE.steps]))
             lanes.output(L, j, params[pt], states[pt], metrics[pt], strobes[pt], ring[j], acc[j],
                          ring_len, status, orbit)
+            if L[LANE.tangents + j] != 0.0 and pt < derivatives.shape[0]:
+                tangents.write(L, j, it + 1.0, derivatives[pt])
+            carrying -= L[LANE.tangents + j]
             control[b] += 1
             pt = _next_point(params, states, metrics, strobes, successors, queue, pt,
                              status == STATUS.diverged, control, b)
             if pt >= 0:
                 lanes.take(L, j, params, states, pt, ring, acc, gaps, it + 1.0)
                 point[j] = pt
+                carrying += L[LANE.tangents + j]
             else:
                 point[j] = -1
                 lanes.idle(L, j)
@@ -192,7 +205,8 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     heads = _taking_order(params, heads)
     threads = call_threads(params, len(heads))
     control = np.zeros(threads + 2, dtype=np.int64)  # points done per thread; next line; stop
-    args = (params, states, metrics, strobes, successors, heads, control, settle)
+    args = (params, states, metrics, strobes, successors, heads, control, settle,
+            _NO_DERIVATIVES)
     if on_points is None:
         _run_threads(*args)
         return
@@ -224,6 +238,7 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
         raise failure[0]
 
 
+_NO_DERIVATIVES = np.empty((0, N_RIGID, N_RIGID))  # (run_points: no row asks for tangents)
 _POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
 
 #: A call whose budget (periods x steps, summed over its points) is below this many RK4
@@ -272,17 +287,20 @@ def _taking_order(params, heads):
 
 
 @njit(**JIT)
-def run_independent(params, states, metrics, strobes, settle, most):
+def run_independent(params, states, metrics, strobes, settle, most, derivatives):
     """:func:`run_points` for points that are each a line of their own (no successors),
     callable from compiled code, on at most ``most`` threads (numba's count, read by the
-    Python caller): the orbit solver's rounds. numba's threads must have been started
+    Python caller): the orbit solver's rounds. A point whose row asks for tangents
+    (PARAM.tangents) and can carry them (tangents.carried) gets its run's monodromy
+    dy(end)/dy(start) of the rigid model's state in ``derivatives[i]`` (n, 3, 3); the
+    others' are left unwritten. numba's threads must have been started
     (numba.get_num_threads, or a parallel function called from Python, starts them): a
     parallel loop reached from compiled code does not start them, and crashes."""
     n = params.shape[0]
     heads = _taking_order(params, np.arange(n))
     control = np.zeros(_threads(params, n, most) + 2, dtype=np.int64)
     _run_threads(params, states, metrics, strobes, np.full(n, -1, dtype=np.int64), heads,
-                 control, settle)
+                 control, settle, derivatives)
 
 
 def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
@@ -307,7 +325,8 @@ def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:
 
 
 @njit(parallel=True, nogil=True, **JIT)
-def _run_threads(params, states, metrics, strobes, successors, heads, control, settle):
+def _run_threads(params, states, metrics, strobes, successors, heads, control, settle,
+                 derivatives):
     """Every thread takes lines from ``heads`` as its lanes need them (see _next_point),
     so that the threads end together whatever the lines cost."""
     no_series = np.empty((0, len(SERIES)))
@@ -315,7 +334,7 @@ def _run_threads(params, states, metrics, strobes, successors, heads, control, s
         # (b as int64, the type record_series calls with: numba compiled the queue for the
         # prange index both as int64 and as uint64)
         _run_queue(params, states, metrics, strobes, no_series, settle, heads, successors,
-                   control, np.int64(b))
+                   control, np.int64(b), derivatives)
 
 
 def warm_up() -> None:
@@ -341,5 +360,6 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     series = np.empty((periods * n_steps + 1, len(SERIES)))
     _run_queue(row[None, :], state.copy()[None, :], np.empty((1, len(METRIC))),
                np.empty((1, 0, N_STROBE)), series, False, np.zeros(1, dtype=np.int64),
-               np.full(1, -1, dtype=np.int64), np.zeros(3, dtype=np.int64), 0)
+               np.full(1, -1, dtype=np.int64), np.zeros(3, dtype=np.int64), 0,
+               np.empty((1, N_RIGID, N_RIGID)))
     return series

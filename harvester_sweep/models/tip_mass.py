@@ -123,6 +123,85 @@ def rk4(x, v, V, dt, f0, fm, f1, k, contact=True):
     return x + dx, v + dv, V + dV, dq, a1
 
 
+@njit(inline="always", **JIT)
+def rk4_slopes(x, v, V, dt, f0, fm, f1, k):
+    """The contact force's slopes by x and by v (hertz.slopes, per unit mass: [1/s^2],
+    [1/s]) at the four stages of :func:`rk4`'s step from (x, v, V), in stage order: what
+    :func:`rk4_tangent` carries a change of the state through that step with."""
+    hh = 0.5 * dt
+    a1, e1 = derivatives(x, v, V, f0, k)
+    x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
+    a2, e2 = derivatives(x2, v2, V2, fm, k)
+    x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
+    a3, _ = derivatives(x3, v3, V3, fm, k)
+    x4, v4 = x + dt * v3, v + dt * a3
+    sx1, sv1 = hertz.slopes(k.khm, x - k.g, v, k.ch)
+    sx2, sv2 = hertz.slopes(k.khm, x2 - k.g, v2, k.ch)
+    sx3, sv3 = hertz.slopes(k.khm, x3 - k.g, v3, k.ch)
+    sx4, sv4 = hertz.slopes(k.khm, x4 - k.g, v4, k.ch)
+    return sx1, sv1, sx2, sv2, sx3, sv3, sx4, sv4
+
+
+@njit(inline="always", **JIT)
+def _variation(sx, sv, k, dx, dv, dV):
+    """The rates of a change (dx, dv, dV) of the state [m, m/s, V] (the variational
+    equations), where the contact force's slopes are sx, sv (:func:`rk4_slopes`)."""
+    return (dv, -(k.wn2 + sx) * dx - (k.cm + sv) * dv + k.thm * dV,
+            -k.irc * dV - k.thc * dv)
+
+
+@njit(inline="always", **JIT)
+def rk4_tangent(slopes, dt, k, dx, dv, dV):
+    """A change (dx, dv, dV) of the state at the start of :func:`rk4`'s step of length dt
+    [s], carried to its end: the step's own derivative (the RK4 stages of the variational
+    equations, with the stages' force slopes ``slopes`` of :func:`rk4_slopes`)."""
+    hh, h6 = 0.5 * dt, dt / 6.0
+    sx1, sv1, sx2, sv2, sx3, sv3, sx4, sv4 = slopes
+    x1, v1, e1 = _variation(sx1, sv1, k, dx, dv, dV)
+    x2, v2, e2 = _variation(sx2, sv2, k, dx + hh * x1, dv + hh * v1, dV + hh * e1)
+    x3, v3, e3 = _variation(sx3, sv3, k, dx + hh * x2, dv + hh * v2, dV + hh * e2)
+    x4, v4, e4 = _variation(sx4, sv4, k, dx + dt * x3, dv + dt * v3, dV + dt * e3)
+    return (dx + h6 * (x1 + 2.0 * (x2 + x3) + x4), dv + h6 * (v1 + 2.0 * (v2 + v3) + v4),
+            dV + h6 * (e1 + 2.0 * (e2 + e3) + e4))
+
+
+@njit(inline="always", **JIT)
+def rk4_moved(x, v, V, dt, f0, fm, f1, r0, rm, r1, k, dx, dv, dV, dstart, dlength):
+    """The change of the end of :func:`rk4`'s step of length dt [s] from (x, v, V) by a
+    change (dx, dv, dV) of its start state, ``dstart`` [s] of its start time and
+    ``dlength`` [s] of its length: the RK4 stages differentiated by all three. r0, rm, r1:
+    the forcing's rates d/dt (A sin(w t)) at the start, middle and end [m/s^3]."""
+    hh = 0.5 * dt
+    a1, e1 = derivatives(x, v, V, f0, k)
+    sx, sv = hertz.slopes(k.khm, x - k.g, v, k.ch)
+    x1, v1, e1d = _variation(sx, sv, k, dx, dv, dV)
+    v1 += r0 * dstart
+    x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
+    a2, e2 = derivatives(x2, v2, V2, fm, k)
+    sx, sv = hertz.slopes(k.khm, x2 - k.g, v2, k.ch)
+    x2d, v2d, e2d = _variation(sx, sv, k, dx + 0.5 * dlength * v + hh * x1,
+                               dv + 0.5 * dlength * a1 + hh * v1,
+                               dV + 0.5 * dlength * e1 + hh * e1d)
+    v2d += rm * (dstart + 0.5 * dlength)
+    x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
+    a3, e3 = derivatives(x3, v3, V3, fm, k)
+    sx, sv = hertz.slopes(k.khm, x3 - k.g, v3, k.ch)
+    x3d, v3d, e3d = _variation(sx, sv, k, dx + 0.5 * dlength * v2 + hh * x2d,
+                               dv + 0.5 * dlength * a2 + hh * v2d,
+                               dV + 0.5 * dlength * e2 + hh * e2d)
+    v3d += rm * (dstart + 0.5 * dlength)
+    x4, v4, V4 = x + dt * v3, v + dt * a3, V + dt * e3
+    a4, e4 = derivatives(x4, v4, V4, f1, k)
+    sx, sv = hertz.slopes(k.khm, x4 - k.g, v4, k.ch)
+    x4d, v4d, e4d = _variation(sx, sv, k, dx + dlength * v3 + dt * x3d,
+                               dv + dlength * a3 + dt * v3d, dV + dlength * e3 + dt * e3d)
+    v4d += r1 * (dstart + dlength)
+    h6, l6 = dt / 6.0, dlength / 6.0
+    return (dx + l6 * (v + 2.0 * (v2 + v3) + v4) + h6 * (x1 + 2.0 * (x2d + x3d) + x4d),
+            dv + l6 * (a1 + 2.0 * (a2 + a3) + a4) + h6 * (v1 + 2.0 * (v2d + v3d) + v4d),
+            dV + l6 * (e1 + 2.0 * (e2 + e3) + e4) + h6 * (e1d + 2.0 * (e2d + e3d) + e4d))
+
+
 @njit(**JIT)
 def free_step_map(h, ca, sa, A, wn2, cm, thm, irc, thc):
     """The RK4 step of length h [s] without contact, as the linear map it is.
