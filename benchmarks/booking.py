@@ -42,16 +42,18 @@ def _sweep_rate(outputs) -> float:
     return int(ds.rk4_steps.sum()) / (time.perf_counter() - start) / 1e6
 
 
-def _shares(grid, estimate: str) -> dict:
+def _shares(grid, estimate: str, parameters: dict | None = None) -> dict:
     """Fractions of a sweep's RK4 steps run by the Newton iterates (their centre lanes),
-    their perturbed copies and the rest (motion, estimates), as the orbit solver books
-    them (``orbits.WORK``), from every solve of the sweep (work.Tally)."""
+    their perturbed copies (where the monodromy is not carried along the run) and the
+    rest (motion, estimates), as the orbit solver books them (``orbits.WORK``), from every
+    solve of the sweep (work.Tally); ``parameters`` set beside the grid's."""
     counts = dict.fromkeys(("Newton iterates", "perturbed copies", "motion and estimates"), 0.0)
     kinds = dict(zip(orbits.WORK, ("motion and estimates", "Newton iterates",
                                    "perturbed copies", "perturbed copies",
                                    "motion and estimates")))
     spec = sweep_spec(grid)
     spec["sweep"]["error_estimate"] = estimate
+    spec["parameters"].update(parameters or {})
     with Tally() as tally:
         hs.run_sweep(spec, None, progress=False)
     for kind, steps in tally.steps.items():

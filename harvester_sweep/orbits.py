@@ -8,22 +8,27 @@ multipliers (the eigenvalues of the monodromy matrix ``dP^p/dy``).
 
 How, and why (docs/numerics.md, "Periodic orbits"):
 
-- **The monodromy matrix by perturbed copies.** Each Newton iterate is run for p periods
-  in one lane and, in three more, from it moved by ``PERTURBATION`` of each component's
-  scale: the columns of the monodromy are the forward differences. The copies are
-  ordinary points of the lane engine (the same RK4, switches located as in the run), so
-  the matrix includes the contact switches without any saltation algebra. A converged
-  orbit is judged, and its multipliers given, on central differences (``CENTRAL``, six
-  copies), where its map is not affine: near grazing the map bends too sharply for the
-  forward ones. An iterate a small Newton step (``LAST_STEP``) from the last runs its
-  copies both ways at once, as it is likely the orbit.
+- **The monodromy matrix, carried along.** Each Newton iterate is run for p periods in
+  one lane that carries the map's derivative with its state (the variational equations
+  of the engine's own steps, switches and their moves included: _engine.tangents), where
+  the engine can (switches located, rigid stops, a fixed approach velocity). Elsewhere
+  (a moving stop, a latched law, plain fixed steps) it runs in three more lanes, from
+  it moved by ``PERTURBATION`` of each component's scale, the forward differences the
+  columns of the monodromy; there a converged orbit is judged, and its multipliers given,
+  on central differences (``CENTRAL``, six copies), where its map is not affine: near
+  grazing the map bends too sharply for the forward ones. An iterate a small Newton step
+  (``LAST_STEP``) from the last runs its copies both ways at once, as it is likely the
+  orbit.
 - **Chord steps.** An iterate reuses the last monodromy and runs its centre lane alone
   where that monodromy is still the map's: no lane of its run touched a stop (the map is
-  affine off the stop), or the iterate moved less than ``CHORD`` from where it was taken.
+  affine off the stop), or, for a point that takes copies, the iterate moved less than
+  ``CHORD`` from where it was taken (a carried monodromy costs about a period more, and a
+  fixed point is then judged on its own run's).
   Where the run Newton starts from is expected to stay clear of the stops (the last run
   did; from rest, the motion without the stops says so: period_map.contact_free_extent), its first
   iterate is a chord step too, with the contact-free map's monodromy in closed form
-  (period_map.free_monodromy_into); if it touched after all, it is run again with copies.
+  (period_map.free_monodromy_into); if it touched after all, it is run again, its
+  monodromy carried or by copies.
 - **Newton only accelerates.** An attempt starts from the trajectory's state ``t``; its
   first evaluation is also the trajectory's next p periods. A converged fixed point is
   taken only when it is stable (spectral radius below 1, by central differences) and the
@@ -144,8 +149,9 @@ _WAITING, _NEWTON, _TRANSIENT, _ESTIMATE, _DONE = range(5)
 
 #: What a point's RK4 steps were run for (Orbits.work_by_kind): the pieces of trajectory
 #: between attempts, Newton's centre lanes (an attempt's first run, which is also the
-#: trajectory's next p periods, included), the monodromy's forward and central copies, the
-#: error estimate's runs at twice the steps.
+#: trajectory's next p periods, included; the monodromy they carry, where they do, is not
+#: counted apart), the monodromy's forward and central copies, the error estimate's runs at
+#: twice the steps.
 WORK = ("trajectory", "newton", "forward_copies", "central_copies", "estimate")
 _TRAJECTORY_WORK, _NEWTON_WORK, _FORWARD_WORK, _CENTRAL_WORK, _ESTIMATE_WORK = range(len(WORK))
 
@@ -197,7 +203,7 @@ _FLAG = layout("FlagRow", (
     ("exact", "the newton monodromy may judge an orbit"),
     # before any run: the linear motion's first period says whether it will
     ("touched", "the run Newton starts from touched a stop"),
-    ("recheck", "the attempt's first run, again with copies"),
+    ("recheck", "the attempt's first run, again with its monodromy"),
 ))
 #: A point's states (_Points.states: (n, 4, len(STATE))).
 _STATES = layout("States", (
@@ -216,7 +222,7 @@ _COMPONENTS = layout("Components", (
 _JACOBIANS = layout("Jacobians", (
     ("jacobian", "of the orbit taken"),
     ("first_jacobian", "of each attempt's first run"),
-    ("newton_jacobian", "of the last copies, or the contact-free map's"),
+    ("newton_jacobian", "of the last run that took one, or the contact-free map's"),
 ))
 #: A point's metric rows (_Points.metric_rows: (n, 2, len(METRIC))).
 _METRIC_ROWS = layout("MetricRows", (
@@ -691,7 +697,8 @@ def _attempt(T, i):
 def _first_run(T, i):
     """Newton's first run from point i's iterate: where the motion was clear of the stops,
     it is likely to be too, so its centre lane alone, with the contact-free map's
-    monodromy (run again with copies if it touched after all); else with copies."""
+    monodromy (run again if it touched after all); else with its monodromy, carried or
+    by copies."""
     T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.central] = T.flags[i, _FLAG.exact] = False
     # (a moving stop's map is not the tip's alone)
     if T.components.shape[2] == N_RIGID and not T.flags[i, _FLAG.touched]:
@@ -706,9 +713,10 @@ def _first_run(T, i):
 @njit(**SOLVER_JIT)
 def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     """The phase _NEWTON: point i's Newton iterate ran, metrics ``m``, end state ``centre``
-    and strobes of its centre lane, the monodromy ``jac`` (of its copies, or reused by a
-    chord step) and whether every lane ran sane and finite. Returns its next phase:
-    _NEWTON for a next iterate (or the same one again, with copies), and those of a fixed
+    and strobes of its centre lane, the monodromy ``jac`` (carried along the run, of its
+    copies, or reused by a chord step) and whether every lane ran sane and finite. Returns
+    its next phase: _NEWTON for a next iterate (or the same one again, with its
+    monodromy), and those of a fixed
     point (_converged) or of an attempt given up (_give_up)."""
     size = T.components.shape[2]
     phase = _NEWTON
@@ -732,7 +740,7 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     touched = _touched(T.rows[i], m)
     distance = np.maximum(size_, 0.5 * norm(centre[:size] - y, scale))
     # (a first run that touched a stop with the contact-free map's monodromy is run again
-    # with copies, and judged then)
+    # with its own, and judged then)
     recheck = trajectory and T.flags[i, _FLAG.chord] and T.flags[i, _FLAG.affine] and touched \
         and not diverged
     opening = (trajectory and not recheck) or T.flags[i, _FLAG.recheck]
@@ -775,14 +783,14 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     stalled = stalled and not enough
     # a chord step that stalls, or that touched a stop with the monodromy of an affine run
     # (converged or not: that monodromy is not the orbit's), is taken again from the same
-    # iterate, with copies
+    # iterate, with its monodromy
     again = recheck or ((stalled or (T.flags[i, _FLAG.affine] and touched))
                         and T.flags[i, _FLAG.chord] and not far and not diverged
                         and T.counts[i, _COUNT.iteration] + 1 < MAX_NEWTON)
-    # a converged orbit is judged, and its multipliers given, on a monodromy by central
-    # differences (CENTRAL) where its map is not affine: the forward ones err by
-    # PERTURBATION times the map's curvature; so its copies run again from the same
-    # iterate, both ways
+    # a converged orbit is judged, and its multipliers given, on a monodromy carried along
+    # its run or by central differences (CENTRAL) where its map is not affine: forward
+    # ones err by PERTURBATION times the map's curvature; so its copies run again from the
+    # same iterate, both ways (a carried monodromy is exact: _round)
     sharpen = converged and not again and not T.flags[i, _FLAG.exact] and not diverged
     # (and in a re-solve at a finer step, which has no other way to its orbit, a chord step
     # that stalled had a monodromy too far off to contract: near grazing forward

@@ -8,11 +8,13 @@ requests, each alone or with its perturbed copies, in one engine call), the comp
 solver through compiled entries (:func:`run_lanes`, :func:`free_monodromy_into`,
 :func:`copies_monodromy`), scenes and basins record a point's steps (:func:`record`).
 
-The monodromy ``dP^p/dy`` comes from perturbed copies of a state run beside it
-(:data:`COPIES`): ordinary points of the lane engine, the same RK4 with its switches
-located, so that the matrix includes the contact switches without any saltation algebra.
-Clear of the stops the model is linear, and the monodromy has a closed form
-(:func:`contact_free_monodromy`; :func:`free_monodromy_into` from compiled code).
+The monodromy ``dP^p/dy`` comes from the run itself, which carries the derivative of its
+steps along (:func:`run_lanes` with PARAM.tangents, where :func:`carries_tangents`), or
+from perturbed copies of a state run beside it (:data:`COPIES`): ordinary points of the
+lane engine, the same RK4 with its switches located, so that the matrix includes the
+contact switches without any algebra of its own. Clear of the stops the model is linear,
+and the monodromy has a closed form (:func:`contact_free_monodromy`;
+:func:`free_monodromy_into` from compiled code).
 """
 
 from __future__ import annotations
