@@ -63,7 +63,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
     for j in range(LANES):
         lanes.idle(L, j)
     active = 0
-    carrying = 0.0  # lanes that carry tangents (lanes.keep_starts)
+    carrying = 0.0  # lanes in contact that carry tangents (lanes.keep_starts)
     for j in range(n_lanes):  # the lanes that get no point are the last ones
         pt = _next_point(params, states, metrics, strobes, successors, queue, -1, False,
                          control, b)
@@ -72,7 +72,7 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         lanes.take(L, j, params, states, pt, ring, acc, gaps, 0.0)
         point[j] = pt
         active += 1
-        carrying += L[LANE.tangents + j]
+        carrying += L[LANE.tangents + j] * L[LANE.on + j]
     groups = (active + GROUP - 1) // GROUP
     it = -1.0  # the iteration of the lane loop
     while active > 0:
@@ -92,7 +92,10 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         for j in range(n_lanes):
             if L[LANE.need + j] == 0.0 or point[j] < 0:
                 continue
-            if not lanes.finish_step(L, j, it):
+            carrying -= L[LANE.tangents + j] * L[LANE.on + j]
+            ended = lanes.finish_step(L, j, it)
+            carrying += L[LANE.tangents + j] * L[LANE.on + j]
+            if not ended:
                 continue
             pt = point[j]
             status, orbit = lanes.end_period(L, j, params[pt], ring[j], acc[j], gaps[j],
@@ -105,14 +108,14 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
                          ring_len, status, orbit)
             if L[LANE.tangents + j] != 0.0 and pt < derivatives.shape[0]:
                 tangents.write(L, j, it + 1.0, derivatives[pt])
-            carrying -= L[LANE.tangents + j]
+            carrying -= L[LANE.tangents + j] * L[LANE.on + j]
             control[b] += 1
             pt = _next_point(params, states, metrics, strobes, successors, queue, pt,
                              status == STATUS.diverged, control, b)
             if pt >= 0:
                 lanes.take(L, j, params, states, pt, ring, acc, gaps, it + 1.0)
                 point[j] = pt
-                carrying += L[LANE.tangents + j]
+                carrying += L[LANE.tangents + j] * L[LANE.on + j]
             else:
                 point[j] = -1
                 lanes.idle(L, j)
@@ -262,7 +265,10 @@ def _threads(params, lines, most):
     reading it in compiled code keeps the code out of numba's cache)."""
     budget = 0.0
     for i in range(params.shape[0]):
-        budget += params[i, PARAM.max_periods] * params[i, PARAM.steps]
+        # (a run that carries its monodromy counts as the N_RIGID + 1 lanes of the copies
+        # it stands for: its tangents cost it a few times the state's work in contact)
+        lanes_of = N_RIGID + 1.0 if params[i, PARAM.tangents] != 0.0 else 1.0
+        budget += params[i, PARAM.max_periods] * params[i, PARAM.steps] * lanes_of
     if budget < SHORT_CALL:
         return 1
     return max(1, min(most, -(-lines // LANES)))

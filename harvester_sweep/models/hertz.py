@@ -48,6 +48,15 @@ def slopes(kh, delta, rate, ch):
 
 
 @njit(inline="always", **JIT)
+def force_and_slopes(kh, delta, rate, ch):
+    """:func:`force` and :func:`slopes` at once, from one square root."""
+    d = max(delta, 0.0)
+    c = max(1.0 + ch * rate, 0.0)
+    root = math.sqrt(d)
+    return kh * d * c * root, 1.5 * kh * root * c, (kh * d * root * ch if c > 0.0 else 0.0)
+
+
+@njit(inline="always", **JIT)
 def clip(rate, ch):
     """1 + c_h r [-]: the clip's surface, positive where the stop can push."""
     return 1.0 + ch * rate

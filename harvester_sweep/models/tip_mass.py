@@ -124,21 +124,25 @@ def rk4(x, v, V, dt, f0, fm, f1, k, contact=True):
 
 
 @njit(inline="always", **JIT)
+def _stage(x, v, V, f, k):
+    """The rates of x [m/s], v [m/s^2] and V [V/s] at a state, and the contact force's
+    slopes by x and by v there (hertz.force_and_slopes, per unit mass)."""
+    fc, sx, sv = hertz.force_and_slopes(k.khm, x - k.g, v, k.ch)
+    return f - k.wn2 * x + k.thm * V - k.cm * v - fc, -k.irc * V - k.thc * v, sx, sv
+
+
+@njit(inline="always", **JIT)
 def rk4_slopes(x, v, V, dt, f0, fm, f1, k):
     """The contact force's slopes by x and by v (hertz.slopes, per unit mass: [1/s^2],
     [1/s]) at the four stages of :func:`rk4`'s step from (x, v, V), in stage order: what
     :func:`rk4_tangent` carries a change of the state through that step with."""
     hh = 0.5 * dt
-    a1, e1 = derivatives(x, v, V, f0, k)
+    a1, e1, sx1, sv1 = _stage(x, v, V, f0, k)
     x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
-    a2, e2 = derivatives(x2, v2, V2, fm, k)
+    a2, e2, sx2, sv2 = _stage(x2, v2, V2, fm, k)
     x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
-    a3, _ = derivatives(x3, v3, V3, fm, k)
-    x4, v4 = x + dt * v3, v + dt * a3
-    sx1, sv1 = hertz.slopes(k.khm, x - k.g, v, k.ch)
-    sx2, sv2 = hertz.slopes(k.khm, x2 - k.g, v2, k.ch)
-    sx3, sv3 = hertz.slopes(k.khm, x3 - k.g, v3, k.ch)
-    sx4, sv4 = hertz.slopes(k.khm, x4 - k.g, v4, k.ch)
+    a3, _, sx3, sv3 = _stage(x3, v3, V3, fm, k)
+    sx4, sv4 = hertz.slopes(k.khm, x + dt * v3 - k.g, v + dt * a3, k.ch)
     return sx1, sv1, sx2, sv2, sx3, sv3, sx4, sv4
 
 
