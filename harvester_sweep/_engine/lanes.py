@@ -681,27 +681,39 @@ def _contact_step_tangents(L, j, it, x, v, V, s0, c0):
 
 
 @njit(**JIT)
-def keep_starts(L, lanes):
-    """Keep the state at the start of this iteration's step of each of the first ``lanes``
-    lanes that carries tangents and is in contact: the lane loop commits a plain step in
-    contact as it does for any lane (the same bits), and carry_tangents carries the
-    tangents through it from there. (Not in the lane loop itself: a row more written
-    there changed how LLVM compiled it, and a lane's bits came to depend on its
-    neighbours.)"""
+def carriers(L, lanes, out):
+    """Write into ``out`` the first ``lanes`` lanes that carry tangents and are in contact;
+    returns how many: the lanes keep_starts and carry_tangents look at."""
+    n = 0
     for j in range(lanes):
         if L[LANE.tangents + j] != 0.0 and L[LANE.on + j] == 1.0:
-            L[LANE.t_x + j], L[LANE.t_v + j] = L[LANE.x + j], L[LANE.v + j]
-            L[LANE.t_voltage + j] = L[LANE.voltage + j]
-            L[LANE.t_sin + j], L[LANE.t_cos + j] = L[LANE.sin + j], L[LANE.cos + j]
+            out[n] = j
+            n += 1
+    return n
 
 
 @njit(**JIT)
-def carry_tangents(L, lanes, it):
-    """Carry the tangents of each of the first ``lanes`` lanes that keep_starts kept
-    through its step of iteration ``it``, where the lane loop committed it (not marked for
+def keep_starts(L, lanes, n):
+    """Keep the state at the start of this iteration's step of the lanes ``lanes[:n]``
+    (carriers): the lane loop commits a plain step in contact as it does for any lane
+    (the same bits), and carry_tangents carries the tangents through it from there. (Not
+    in the lane loop itself: a row more written there changed how LLVM compiled it, and a
+    lane's bits came to depend on its neighbours.)"""
+    for k in range(n):
+        j = lanes[k]
+        L[LANE.t_x + j], L[LANE.t_v + j] = L[LANE.x + j], L[LANE.v + j]
+        L[LANE.t_voltage + j] = L[LANE.voltage + j]
+        L[LANE.t_sin + j], L[LANE.t_cos + j] = L[LANE.sin + j], L[LANE.cos + j]
+
+
+@njit(**JIT)
+def carry_tangents(L, lanes, n, it):
+    """Carry the tangents of the lanes ``lanes[:n]`` whose starts keep_starts kept through
+    their step of iteration ``it``, where the lane loop committed it (not marked for
     finish_step, which carries them through the steps it takes)."""
-    for j in range(lanes):
-        if L[LANE.tangents + j] != 0.0 and L[LANE.on + j] == 1.0 and L[LANE.need + j] == 0.0:
+    for k in range(n):
+        j = lanes[k]
+        if L[LANE.need + j] == 0.0:
             _contact_step_tangents(L, j, it, L[LANE.t_x + j], L[LANE.t_v + j],
                                    L[LANE.t_voltage + j], L[LANE.t_sin + j], L[LANE.t_cos + j])
 

@@ -63,7 +63,10 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
     for j in range(LANES):
         lanes.idle(L, j)
     active = 0
-    carrying = 0.0  # lanes in contact that carry tangents (lanes.keep_starts)
+    # the lanes in contact that carry tangents (lanes.carriers), listed again whenever a
+    # lane may have joined or left them
+    carriers = np.empty(LANES, dtype=np.int64)
+    n_carriers, relist = 0, True
     for j in range(n_lanes):  # the lanes that get no point are the last ones
         pt = _next_point(params, states, metrics, strobes, successors, queue, -1, False,
                          control, b)
@@ -72,18 +75,19 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         lanes.take(L, j, params, states, pt, ring, acc, gaps, 0.0)
         point[j] = pt
         active += 1
-        carrying += L[LANE.tangents + j] * L[LANE.on + j]
     groups = (active + GROUP - 1) // GROUP
     it = -1.0  # the iteration of the lane loop
     while active > 0:
         it += 1.0
         if n_series > 0:  # one point recorded at every step boundary
             _record(series, L, int(L[LANE.periods] * L[LANE.steps] + it - L[LANE.k0]))
-        if carrying > 0.0:
-            lanes.keep_starts(L, n_lanes)
+        if relist:
+            n_carriers, relist = lanes.carriers(L, n_lanes, carriers), False
+        if n_carriers > 0:
+            lanes.keep_starts(L, carriers, n_carriers)
         marked, quarters = lanes.lane_steps(L, groups, it)
-        if carrying > 0.0:
-            lanes.carry_tangents(L, n_lanes, it)
+        if n_carriers > 0:
+            lanes.carry_tangents(L, carriers, n_carriers, it)
         if marked == 0:
             continue
         if quarters > 0:
@@ -92,9 +96,9 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
         for j in range(n_lanes):
             if L[LANE.need + j] == 0.0 or point[j] < 0:
                 continue
-            carrying -= L[LANE.tangents + j] * L[LANE.on + j]
+            on = L[LANE.on + j]
             ended = lanes.finish_step(L, j, it)
-            carrying += L[LANE.tangents + j] * L[LANE.on + j]
+            relist = relist or (L[LANE.tangents + j] != 0.0 and L[LANE.on + j] != on)
             if not ended:
                 continue
             pt = point[j]
@@ -108,21 +112,20 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
                          ring_len, status, orbit)
             if L[LANE.tangents + j] != 0.0 and pt < derivatives.shape[0]:
                 tangents.write(L, j, it + 1.0, derivatives[pt])
-            carrying -= L[LANE.tangents + j] * L[LANE.on + j]
+            relist = True
             control[b] += 1
             pt = _next_point(params, states, metrics, strobes, successors, queue, pt,
                              status == STATUS.diverged, control, b)
             if pt >= 0:
                 lanes.take(L, j, params, states, pt, ring, acc, gaps, it + 1.0)
                 point[j] = pt
-                carrying += L[LANE.tangents + j] * L[LANE.on + j]
             else:
                 point[j] = -1
                 lanes.idle(L, j)
                 active -= 1
                 finished = True
         if finished:  # the queue is empty: move the points left to the first lanes
-            active = 0
+            active, relist = 0, True
             for j in range(n_lanes):
                 if point[j] >= 0:
                     if j != active:
