@@ -22,8 +22,8 @@ How, and why (docs/numerics.md, "Periodic orbits"):
 - **Chord steps.** An iterate reuses the last monodromy and runs its centre lane alone
   where that monodromy is still the map's: no lane of its run touched a stop (the map is
   affine off the stop), or, for a point that takes copies, the iterate moved less than
-  ``CHORD`` from where it was taken (a carried monodromy costs about a period more, and a
-  fixed point is then judged on its own run's).
+  ``CHORD`` from where it was taken (a carried monodromy costs one to two periods more, and
+  a fixed point is then judged on its own run's).
   Where the run Newton starts from is expected to stay clear of the stops (the last run
   did; from rest, the motion without the stops says so: period_map.contact_free_extent), its first
   iterate is a chord step too, with the contact-free map's monodromy in closed form
@@ -816,9 +816,9 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
         T.states[i, _STATES.y, size:] = centre[size:]
         T.counts[i, _COUNT.iteration] += 1
         T.reals[i, _REAL.last] = size_
-        # (where the monodromy is carried along, an iterate near the last has it for about
-        # one more period's cost, and a fixed point the monodromy of its own run, not one
-        # taken CHORD away: near grazing that one can be 2e-4 off)
+        # (where the monodromy is carried along, an iterate near the last has it for one
+        # or two more periods' cost, and a fixed point the monodromy of its own run, not
+        # one taken CHORD away: near grazing that one can be 2e-4 off)
         T.flags[i, _FLAG.chord] = T.flags[i, _FLAG.affine] or (size_ <= CHORD
                                                                and not _carries(T, i))
         # (an iterate this near is likely the orbit: its copies run both ways at once)

@@ -465,9 +465,8 @@ def quarter_steps(L, lanes):
 def _eighth_phases(s0, c0, ce, se):
     """sin of the forcing phase 1, 2, ..., 8 eighths of a step on from sin, cos = s0, c0,
     by rotating it by an eighth's cos, sin = ce, se, for scalar code. The vector code
-    writes the same rotations out (_quarter_block, _trial_steps): with this helper called
-    in _quarter_block, the same points run twice on 2 threads came out with different
-    bits now and then (their lanes' neighbours differ from run to run)."""
+    keeps its own written-out rotations (_quarter_block, _trial_steps), as they were, so
+    that what LLVM makes of it, and the bits a lane gets, stay as they were."""
     s1, c1 = s0 * ce + c0 * se, c0 * ce - s0 * se
     s2, c2 = s1 * ce + c1 * se, c1 * ce - s1 * se
     s3, c3 = s2 * ce + c2 * se, c2 * ce - s2 * se
