@@ -14,8 +14,11 @@ a stop on a spring (:data:`STOP_STATE`, its equations in the engine's stop_motio
 latched approach velocity of the contact law rides along with the state (:data:`LATCHED`).
 
 Out of contact the system is linear (:func:`linear_system`), and so is its RK4 step
-(:func:`free_step_map`). A point's coefficients travel as one :data:`Coefficients` tuple
-(``k``); ``khm`` is 0 for a point out of contact.
+(:func:`free_step_map`). The RK4 step's own derivative by its start state, time and length
+(:func:`rk4_slopes`, :func:`rk4_tangent`, :func:`rk4_moved`: the variational equations in
+its stages) is what the engine carries a monodromy along a run with. A point's
+coefficients travel as one :data:`Coefficients` tuple (``k``); ``khm`` is 0 for a point out
+of contact.
 
 What is derived from this declaration: the engine's state rows and their sizes
 (``_engine.layouts``), the orbits' component scales (``period_map.point_scales``), the
@@ -176,27 +179,23 @@ def rk4_moved(x, v, V, dt, f0, fm, f1, r0, rm, r1, k, dx, dv, dV, dstart, dlengt
     ``dlength`` [s] of its length: the RK4 stages differentiated by all three. r0, rm, r1:
     the forcing's rates d/dt (A sin(w t)) at the start, middle and end [m/s^3]."""
     hh = 0.5 * dt
-    a1, e1 = derivatives(x, v, V, f0, k)
-    sx, sv = hertz.slopes(k.khm, x - k.g, v, k.ch)
+    a1, e1, sx, sv = _stage(x, v, V, f0, k)
     x1, v1, e1d = _variation(sx, sv, k, dx, dv, dV)
     v1 += r0 * dstart
     x2, v2, V2 = x + hh * v, v + hh * a1, V + hh * e1
-    a2, e2 = derivatives(x2, v2, V2, fm, k)
-    sx, sv = hertz.slopes(k.khm, x2 - k.g, v2, k.ch)
+    a2, e2, sx, sv = _stage(x2, v2, V2, fm, k)
     x2d, v2d, e2d = _variation(sx, sv, k, dx + 0.5 * dlength * v + hh * x1,
                                dv + 0.5 * dlength * a1 + hh * v1,
                                dV + 0.5 * dlength * e1 + hh * e1d)
     v2d += rm * (dstart + 0.5 * dlength)
     x3, v3, V3 = x + hh * v2, v + hh * a2, V + hh * e2
-    a3, e3 = derivatives(x3, v3, V3, fm, k)
-    sx, sv = hertz.slopes(k.khm, x3 - k.g, v3, k.ch)
+    a3, e3, sx, sv = _stage(x3, v3, V3, fm, k)
     x3d, v3d, e3d = _variation(sx, sv, k, dx + 0.5 * dlength * v2 + hh * x2d,
                                dv + 0.5 * dlength * a2 + hh * v2d,
                                dV + 0.5 * dlength * e2 + hh * e2d)
     v3d += rm * (dstart + 0.5 * dlength)
     x4, v4, V4 = x + dt * v3, v + dt * a3, V + dt * e3
-    a4, e4 = derivatives(x4, v4, V4, f1, k)
-    sx, sv = hertz.slopes(k.khm, x4 - k.g, v4, k.ch)
+    a4, e4, sx, sv = _stage(x4, v4, V4, f1, k)
     x4d, v4d, e4d = _variation(sx, sv, k, dx + dlength * v3 + dt * x3d,
                                dv + dlength * a3 + dt * v3d, dV + dlength * e3 + dt * e3d)
     v4d += r1 * (dstart + dlength)
