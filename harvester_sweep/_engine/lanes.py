@@ -277,8 +277,8 @@ def _increment(L, row, x, v, V, s0, c0):
 @njit(inline="always", **JIT)
 def _half_phases(s0, c0, ca, sa):
     """sin of the forcing phase half a step and a step on from sin, cos = s0, c0, by
-    rotating it by the half step's cos, sin = ca, sa, for scalar code: the lane loop
-    writes the same rotation out (see _eighth_phases)."""
+    rotating it by the half step's cos, sin = ca, sa, for scalar code: the lane loop's
+    trial step writes the same rotation out, its code left as it was."""
     sm = s0 * ca + c0 * sa
     return sm, sm * ca + (c0 * ca - s0 * sa) * sa
 
@@ -464,9 +464,8 @@ def quarter_steps(L, lanes):
 @njit(inline="always", **JIT)
 def _eighth_phases(s0, c0, ce, se):
     """sin of the forcing phase 1, 2, ..., 8 eighths of a step on from sin, cos = s0, c0,
-    by rotating it by an eighth's cos, sin = ce, se, for scalar code. The vector code
-    keeps its own written-out rotations (_quarter_block, _trial_steps), as they were, so
-    that what LLVM makes of it, and the bits a lane gets, stay as they were."""
+    by rotating it by an eighth's cos, sin = ce, se: the quarter steps' forcing, in their
+    vector block and where a lane's tangents are carried through them."""
     s1, c1 = s0 * ce + c0 * se, c0 * ce - s0 * se
     s2, c2 = s1 * ce + c1 * se, c1 * ce - s1 * se
     s3, c3 = s2 * ce + c2 * se, c2 * ce - s2 * se
@@ -521,14 +520,7 @@ def _quarter_block(L, b):
             L[LANE.q_khm + k],
         )
         g, ch, irc, thc = L[LANE.q_gap + k], L[LANE.q_ch + k], L[LANE.q_irc + k], L[LANE.q_thc + k]
-        s1, c1 = s0 * ce + c0 * se, c0 * ce - s0 * se
-        s2, c2 = s1 * ce + c1 * se, c1 * ce - s1 * se
-        s3, c3 = s2 * ce + c2 * se, c2 * ce - s2 * se
-        s4, c4 = s3 * ce + c3 * se, c3 * ce - s3 * se
-        s5, c5 = s4 * ce + c4 * se, c4 * ce - s4 * se
-        s6, c6 = s5 * ce + c5 * se, c5 * ce - s5 * se
-        s7, c7 = s6 * ce + c6 * se, c6 * ce - s6 * se
-        s8 = s7 * ce + c7 * se
+        s1, s2, s3, s4, s5, s6, s7, s8 = _eighth_phases(s0, c0, ce, se)
         coef = Coefficients(wn2, cm, thm, khm, g, ch, irc, thc)
         x, v, V, _, _ = rk4(x, v, V, dt, A * s0, A * s1, A * s2, coef)
         x, v, V, _, _ = rk4(x, v, V, dt, A * s2, A * s3, A * s4, coef)

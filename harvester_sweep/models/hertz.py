@@ -37,23 +37,21 @@ def force(kh, delta, rate, ch):
 
 
 @njit(inline="always", **JIT)
-def slopes(kh, delta, rate, ch):
-    """The derivatives of :func:`force` by ``delta`` [N/m] and by ``rate`` [N s/m] (per
-    unit mass for ``kh`` = k_h / m), 0 where the force is off: what the variational
-    equations of a motion in contact take."""
-    d = max(delta, 0.0)
-    c = max(1.0 + ch * rate, 0.0)
-    root = math.sqrt(d)
-    return 1.5 * kh * root * c, (kh * d * root * ch if c > 0.0 else 0.0)
-
-
-@njit(inline="always", **JIT)
 def force_and_slopes(kh, delta, rate, ch):
     """:func:`force` and :func:`slopes` at once, from one square root."""
     d = max(delta, 0.0)
     c = max(1.0 + ch * rate, 0.0)
     root = math.sqrt(d)
     return kh * d * c * root, 1.5 * kh * root * c, (kh * d * root * ch if c > 0.0 else 0.0)
+
+
+@njit(inline="always", **JIT)
+def slopes(kh, delta, rate, ch):
+    """The derivatives of :func:`force` by ``delta`` [N/m] and by ``rate`` [N s/m] (per
+    unit mass for ``kh`` = k_h / m), 0 where the force is off: what the variational
+    equations of a motion in contact take."""
+    _, by_delta, by_rate = force_and_slopes(kh, delta, rate, ch)
+    return by_delta, by_rate
 
 
 @njit(inline="always", **JIT)
