@@ -58,7 +58,8 @@ def _per_period(rows, states, rounds) -> tuple[float, float]:
     metrics = np.empty((len(rows), len(METRIC)))
 
     def run():
-        run_lanes(rows, states.copy(), metrics, np.empty((len(rows), 0, 3)), 1)
+        run_lanes(rows, states.copy(), metrics, np.empty((len(rows), 0, 3)), 1,
+                  np.empty((0, 0, 0)))  # (no point carries its monodromy)
         return metrics[:, METRIC.periods_run].sum(), metrics[:, METRIC.impacts_per_period].mean()
 
     seconds, (periods, impacts) = best(run, rounds)
