@@ -11,13 +11,16 @@ branch turns back in the parameter: the S-shaped response comes out whole, unsta
 included. Components are scaled (x by the start orbit's amplitude, v by w x, V by its
 peak voltage, lam by the range), and the arclength is measured in them.
 
-- **Jacobian.** The monodromy matrix ``M = dP^p/dy`` from twelve perturbed copies, at
-  +-1 and +-2 ``CENTRAL`` of each component's scale: the median of the four slopes between
-  the five states along a component (the RK4 map jumps by about its own error where a
-  switch crosses a step's end, and a slope across the jump is far off); ``dP^p/dlam`` by
-  one more lane at ``lam + PERTURBATION * range``: every Newton iterate is one engine call
-  of fourteen points. Forward differences put the paper S-curve's lower fold where the
-  SciPy reference's multiplier is 1.0036, central ones across a jump read 0.89 for its
+- **Jacobian.** The monodromy matrix ``M = dP^p/dy`` carried along the iterate's run
+  (the variational equations of the engine's own steps: period_map.Batch's "carried"
+  requests) where the point can carry it (switches located, rigid stops, a fixed approach
+  velocity); elsewhere from twelve perturbed copies, at +-1 and +-2 ``CENTRAL`` of each
+  component's scale: the median of the four slopes between the five states along a
+  component (the RK4 map jumps by about its own error where a switch crosses a step's
+  end, and a slope across the jump is far off). ``dP^p/dlam`` by one more lane at
+  ``lam + PERTURBATION * range``: every Newton iterate is one engine call of two lanes
+  (fourteen with copies). Forward differences put the paper S-curve's lower fold where
+  the SciPy reference's multiplier is 1.0036, central ones across a jump read 0.89 for its
   upper fold's 1.0000 (docs/numerics.md).
 - **Steps.** The arclength step grows after an easy correction and shrinks after a hard
   one, a failed one or a turn of the tangent beyond ``MAX_TURN``: the branch's sharp bend
@@ -306,7 +309,10 @@ class _Problem:
             batch.add(row, state[None, :], period)
             (at,) = batch.run()
             return (at.ends[0], at.metrics[0], None, None) if at.ok[0] else None
-        batch.add(row, state[None, :], period, copies="spread", scale=self.scale[None, :])
+        if period_map.carries_tangents(row):
+            batch.add(row, state[None, :], period, copies="carried")
+        else:
+            batch.add(row, state[None, :], period, copies="spread", scale=self.scale[None, :])
         # (the perturbed runs' end states alone are read)
         batch.add(shifted, state[None, :], period, book=False)
         at, beside = batch.run()
@@ -942,8 +948,9 @@ def _accurate_point(problem: _Problem, point: _Point, accuracy: float,
 def _resolve(problem: _Problem, point: _Point, steps: int):
     """``point`` solved again at ``steps`` steps per period: at its own parameter value,
     or, where that does not converge (near a fold the orbit may not exist there), normal
-    to the branch; quasi-Newton with its Jacobian, then one run with copies for the
-    monodromy at the new step (the multipliers and test functions of the map reported).
+    to the branch; quasi-Newton with its Jacobian, then one run for the monodromy at the
+    new step, carried or by copies (the multipliers and test functions of the map
+    reported).
     None where neither converges."""
     for constraint in (np.eye(problem.D + 1)[problem.D], point.tangent):
         finer = problem.correct(point.z, constraint, point.period, point.state, steps=steps,

@@ -4,12 +4,14 @@
 located contact switches. Every analysis runs the engine through this module, the only
 one outside ``_engine`` that calls its entry points (the solver uses ``_engine``'s cache
 and layout helpers too): continuation evaluates the map (:class:`Batch`: many
-requests, each alone or with its perturbed copies, in one engine call), the compiled orbit
+requests, each alone, carrying its monodromy or with its perturbed copies, in one engine
+call), the compiled orbit
 solver through compiled entries (:func:`run_lanes`, :func:`free_monodromy_into`,
 :func:`copies_monodromy`), scenes and basins record a point's steps (:func:`record`).
 
 The monodromy ``dP^p/dy`` comes from the run itself, which carries the derivative of its
-steps along (:func:`run_lanes` with PARAM.tangents, where :func:`carries_tangents`), or
+steps along (:func:`run_lanes` with PARAM.tangents, or a :class:`Batch` request of
+"carried" points, where :func:`carries_tangents`), or
 from perturbed copies of a state run beside it (:data:`COPIES`): ordinary points of the
 lane engine, the same RK4 with its switches located, so that the matrix includes the
 contact switches without any algebra of its own. Clear of the stops the model is linear,
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from . import _engine
@@ -279,7 +282,8 @@ class Evaluation:
         bool (n,): every lane of the point (copies included) ran sane, and ended finite
         in the map's components.
     jacobian : numpy.ndarray or None
-        float64 (n, size, size): the monodromy from the copies; None without copies.
+        float64 (n, size, size): the monodromy from the copies, or carried along the run;
+        None without either.
     work : numpy.ndarray
         float64 (n,): RK4 steps run for the point, copies included.
     """
@@ -316,7 +320,9 @@ class Batch:
         periods : int or (n,) periods to run (PARAM.max_periods).
         steps : float or (n,) steps per period; None keeps the rows'.
         copies : a kind of COPIES, or None for the points alone; then ``scale`` (n, size)
-            gives each component's scale, as in :func:`perturbed_copies`.
+            gives each component's scale, as in :func:`perturbed_copies`. Or "carried":
+            each point alone, carrying its monodromy along its run (rows that
+            :func:`carries_tangents`).
         book : False: the points' own runs book no extrema or force peaks either
             (_engine.BOOKED_METRICS are NaN), as the copies never do.
         """
@@ -326,7 +332,13 @@ class Batch:
             rows[:, PARAM.steps] = steps
         rows[:, PARAM.max_periods] = periods
         width = 1
-        if copies is not None:
+        carried = copies == "carried"
+        if carried:
+            if not all(carries_tangents(row) for row in rows):
+                raise ValueError("copies='carried': a row that cannot carry its monodromy")
+            rows[:, PARAM.tangents] = 1.0
+            states = states.copy()
+        elif copies is not None:
             width = copies_width(copies, self.size)
             states = perturbed_copies(states, scale, copies)
             rows = np.repeat(rows, width, axis=0)
@@ -335,7 +347,7 @@ class Batch:
             states = states.copy()
         if not book:
             rows[:, PARAM.book] = 0.0
-        self._requests.append((rows, states, width, scale))
+        self._requests.append((rows, states, width, scale, carried))
         return len(self._requests) - 1
 
     def run(self, settle: bool = False) -> list:
@@ -343,26 +355,35 @@ class Batch:
         may end a run early (it never ends one of MAX_ORBIT_PERIOD periods or fewer)."""
         if not self._requests:
             return []
-        rows = np.concatenate([r for r, _, _, _ in self._requests])
-        states = np.concatenate([s for _, s, _, _ in self._requests])
+        rows = np.concatenate([r[0] for r in self._requests])
+        states = np.concatenate([r[1] for r in self._requests])
         metrics = np.empty((len(rows), len(METRIC)))
         strobes = np.empty((len(rows), self.samples, self.size))
-        # (in the calling thread: a call is short, so that an interrupt is seen between
-        # calls, and a kernel run in a thread of its own costs a new thread team each call)
-        _engine.run_points(rows, states, metrics, strobes, settle=settle)
+        if any(r[4] for r in self._requests):
+            derivatives = np.full((len(rows), D, D), np.nan)
+            _engine.run_independent(rows, states, metrics, strobes, np.bool_(settle),
+                                    numba.get_num_threads(), derivatives)
+        else:
+            # (in the calling thread: a call is short, so that an interrupt is seen between
+            # calls, and a kernel run in a thread of its own costs a new thread team each
+            # call)
+            _engine.run_points(rows, states, metrics, strobes, settle=settle)
         work = metrics[:, METRIC.periods_run] * rows[:, PARAM.steps]
         finite = np.all(np.isfinite(states[:, :self.size]), axis=1)
         out, start = [], 0
-        for r, _, width, scale in self._requests:
+        for r, _, width, scale, carried in self._requests:
             n = len(r) // width
             part = slice(start, start + len(r))
             m = metrics[part].reshape(n, width, len(METRIC))
             f = states[part].reshape(n, width, len(STATE))
             ok = np.all(sane(m) & finite[part].reshape(n, width), axis=1)
-            copied = width > 1
+            if carried:
+                jacobian = derivatives[part].copy()
+                ok &= np.all(np.isfinite(jacobian), axis=(1, 2))
+            else:
+                jacobian = monodromy(f, scale) if width > 1 else None
             out.append(Evaluation(
-                m[:, 0], f[:, 0], strobes[part][::width], ok,
-                monodromy(f, scale) if copied else None,
+                m[:, 0], f[:, 0], strobes[part][::width], ok, jacobian,
                 work[part].reshape(n, width).sum(axis=1)))
             start += len(r)
         self._requests = []

@@ -85,3 +85,35 @@ def test_it_is_the_period_maps_derivative_across_impacts(case):
     np.testing.assert_array_equal(ends, plain)
     apart = np.abs(_scaled(carried[0], scale) - _scaled(_central(row, start, scale), scale))
     assert apart.max() < 1e-7, apart
+
+
+def test_a_batch_request_carries_its_monodromy():
+    """period_map.Batch's "carried" request (continuation's Jacobian): each point's
+    monodromy is its map's spread differences to 1e-7 of the scales (measured 1e-8), run
+    in one call with other requests (its rows found among theirs); its own run is the
+    plain one, bit for bit. A row that cannot carry (a stop on a spring) is refused."""
+    p = resolve_parameters("paper")
+    row = packing.pack_parameters(p)
+    row[PARAM.max_periods] = 30
+    start = _runs(row, packing.initial_state(p)[None, :3], 0.0)[0][0]
+    states = np.zeros((2, len(STATE)))
+    states[:, :3] = start
+    states[1, 0] *= 1.001
+    scale = np.repeat(period_map.orbit_scales(row, abs(start[0]), 1e-6)[None], 2, axis=0)
+    batch = period_map.Batch(period_map.D, 0)
+    batch.add(row, states[:1], 1)
+    spread = batch.add(np.repeat(row[None], 2, axis=0), states, 1, copies="spread",
+                       scale=scale)
+    carried = batch.add(np.repeat(row[None], 2, axis=0), states, 1, copies="carried")
+    plain, by_copies, by_tangents = batch.run()
+    assert by_tangents.ok.all() and (spread, carried) == (1, 2)
+    np.testing.assert_array_equal(by_tangents.ends[:1], plain.ends)
+    np.testing.assert_array_equal(by_tangents.metrics[:1], plain.metrics)
+    for k in range(2):
+        apart = np.abs(_scaled(by_tangents.jacobian[k], scale[k])
+                       - _scaled(by_copies.jacobian[k], scale[k]))
+        assert apart.max() < 1e-7, (k, apart)
+    moving = packing.pack_parameters(resolve_parameters("paper", stop_mass=1e-3,
+                                                        stop_support_stiffness=1e4))
+    with pytest.raises(ValueError, match="carried"):
+        period_map.Batch(period_map.D, 0).add(moving, states[:1], 1, copies="carried")
