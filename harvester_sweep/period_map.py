@@ -3,11 +3,11 @@
 ``P^p: y(0) -> y(pT)`` is the stroboscopic map of the engine's own fixed-step RK4 with
 located contact switches. Every analysis runs the engine through this module, the only
 one outside ``_engine`` that calls its entry points (the solver uses ``_engine``'s cache
-and layout helpers too): continuation evaluates the map (:class:`Batch`: many
-requests, each alone, carrying its monodromy or with its perturbed copies, in one engine
-call), the compiled orbit
-solver through compiled entries (:func:`run_lanes`, :func:`free_monodromy_into`,
-:func:`copies_monodromy`), scenes and basins record a point's steps (:func:`record`).
+and layout helpers too): continuation evaluates the map (:class:`Batch`: many requests,
+each alone, carrying its monodromy or with its perturbed copies, in one engine call), the
+compiled orbit solver through compiled entries (:func:`run_lanes`,
+:func:`free_monodromy_into`, :func:`copies_monodromy`), scenes and basins record a point's
+steps (:func:`record`).
 
 The monodromy ``dP^p/dy`` comes from the run itself, which carries the derivative of its
 steps along (:func:`run_lanes` with PARAM.tangents, or a :class:`Batch` request of
@@ -355,18 +355,19 @@ class Batch:
         may end a run early (it never ends one of MAX_ORBIT_PERIOD periods or fewer)."""
         if not self._requests:
             return []
-        rows = np.concatenate([r[0] for r in self._requests])
-        states = np.concatenate([r[1] for r in self._requests])
+        rows = np.concatenate([request[0] for request in self._requests])
+        states = np.concatenate([request[1] for request in self._requests])
         metrics = np.empty((len(rows), len(METRIC)))
         strobes = np.empty((len(rows), self.samples, self.size))
-        if any(r[4] for r in self._requests):
+        # (in the calling thread: a call is short, so that an interrupt is seen between
+        # calls, and a kernel run in a thread of its own costs a new thread team each call;
+        # run_independent, where a request carries its monodromy, is the entry that
+        # returns it)
+        if any(carried for *_, carried in self._requests):
             derivatives = np.full((len(rows), D, D), np.nan)
             _engine.run_independent(rows, states, metrics, strobes, np.bool_(settle),
                                     numba.get_num_threads(), derivatives)
         else:
-            # (in the calling thread: a call is short, so that an interrupt is seen between
-            # calls, and a kernel run in a thread of its own costs a new thread team each
-            # call)
             _engine.run_points(rows, states, metrics, strobes, settle=settle)
         work = metrics[:, METRIC.periods_run] * rows[:, PARAM.steps]
         finite = np.all(np.isfinite(states[:, :self.size]), axis=1)
