@@ -716,8 +716,8 @@ def _newton(T, i, m, centre, strobes, jac, lanes_ok):
     and strobes of its centre lane, the monodromy ``jac`` (carried along the run, of its
     copies, or reused by a chord step) and whether every lane ran sane and finite. Returns
     its next phase: _NEWTON for a next iterate (or the same one again, with its
-    monodromy), and those of a fixed
-    point (_converged) or of an attempt given up (_give_up)."""
+    monodromy), and those of a fixed point (_converged) or of an attempt given up
+    (_give_up)."""
     size = T.components.shape[2]
     phase = _NEWTON
     trajectory = T.counts[i, _COUNT.iteration] == 0 and T.counts[i, _COUNT.refine] == 0

@@ -244,7 +244,8 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
         raise failure[0]
 
 
-_NO_DERIVATIVES = np.empty((0, N_RIGID, N_RIGID))  # (run_points: no row asks for tangents)
+#: The monodromies of a run that keeps none (run_points, record_series): no row's is written.
+_NO_DERIVATIVES = np.empty((0, N_RIGID, N_RIGID))
 _POLL = 0.2  # seconds between looks at the progress of a kernel run in another thread
 
 #: A call whose budget (periods x steps, summed over its points) is below this many RK4
@@ -370,5 +371,5 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     _run_queue(row[None, :], state.copy()[None, :], np.empty((1, len(METRIC))),
                np.empty((1, 0, N_STROBE)), series, False, np.zeros(1, dtype=np.int64),
                np.full(1, -1, dtype=np.int64), np.zeros(3, dtype=np.int64), 0,
-               np.empty((1, N_RIGID, N_RIGID)))
+               _NO_DERIVATIVES)
     return series

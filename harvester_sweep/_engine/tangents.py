@@ -11,18 +11,20 @@ the derivative of the engine's RK4 period map (the monodromy) up to rounding:
   steps in vector code and T waits: the steps since LANE.t_since are carried in at once,
   as ``(I + D)^k`` by repeated squaring (:func:`catch_up`), when the lane next takes a step
   of another kind or ends its run.
-- **In contact** every step of such a lane is finished in scalar code (lanes._commit_steps
-  marks it), where T goes through the step's RK4 stages of the variational equations
-  (tip_mass.rk4_tangent), sub-step by sub-step where the step is split (quarter steps,
-  the graded pieces of rk4.pieces).
+- **In contact** T goes through each step's RK4 stages of the variational equations
+  (tip_mass.rk4_tangent): for a plain step, which the lane loop commits as it does any
+  lane's, from its start state kept before the loop (lanes.keep_starts, carry_tangents);
+  for a step finished in scalar code, there, sub-step by sub-step where the step is split
+  (quarter steps, the graded pieces of rk4.pieces).
 - **A located switch** (touch, separation, clip) splits its step at theta, the root of the
   switch's surface on the RK4 sub-step up to it, and theta moves with y0. The step's end
   is ``G(theta) = after(before(y0, theta), theta)``: its derivative is T through both
   pieces at a fixed theta plus ``G'(theta) d theta``, with ``d theta = -(e . d y_s) / (e .
   H'(theta))`` from the switch's surface normal e and ``H = before(y0, .)``. G' and H'
-  are central differences of the pieces in theta (rk4.switch_tangents): the force is
-  continuous across the switch, so no saltation jump enters, but the pieces are laid out
-  from theta, and their RK4 error moves with it.
+  are the pieces' RK4 stages differentiated by their times and lengths
+  (rk4.switch_tangents, tip_mass.rk4_moved): the force is continuous across the switch,
+  so no saltation jump enters, but the pieces are laid out from theta, and their RK4
+  error moves with it.
 - **Mirroring** (lanes.mirror) negates the state, so it negates T.
 
 Only lanes that locate their switches with a rigid stop and a fixed approach velocity carry
