@@ -12,9 +12,9 @@ unchanged, the metrics within their error estimates. This reports
   before and after (a change of when attempts are made moves the verdict of points that
   settle, or not, near the end of their budget);
 - the orbit periods that changed among the points settled in both;
-- for each metric of the sweep's outputs, among the points settled in both: the largest
-  relative change, and how many changed by more than their error estimate (the larger of
-  the two), where the sweep has one;
+- for power, v_peak, x_max and impacts_per_period (METRICS), where the sweep has them,
+  among the points settled in both: the largest relative change, and how many changed by
+  more than their error estimate (the larger of the two), where the sweep has one;
 - the RK4 steps and the periods of motion run, by status, before and after.
 """
 
