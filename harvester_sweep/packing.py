@@ -20,6 +20,11 @@ from .contact import contact_damping_of, damping_factor, lower_stop
 from .models import hertz
 from .parameters import TooStiffError, forcing_amplitude
 
+#: Contact-free steps a lane takes at once (layouts.PARAM.multi, lanes.resume): their
+#: composition, a map of the same cost as one step. Each multi-step a switch, an extremum
+#: or a period's end falls in is taken again one step at a time, so the gain is the share
+#: of a period clear of them [-].
+MULTI = 4.0
 
 def pack_parameters(p: dict) -> np.ndarray:
     """The engine's parameter row (layouts.PARAM) of a validated parameter dict [SI]."""
@@ -59,6 +64,7 @@ def pack_parameters(p: dict) -> np.ndarray:
         row[PARAM.stop_cm] = p["stop_support_damping"] / ms
         row[PARAM.stop_ratio] = m / ms
     row[PARAM.book] = 1.0  # (every metric)
+    row[PARAM.multi] = MULTI
     return row
 
 

@@ -57,6 +57,102 @@ from .steady import MAX_ORBIT_PERIOD
 SYNC = 2048.0
 
 
+# The rows a lane's step reads that differ between one step and a multi-step: the
+# contact-free map, the forcing's rotation, the lengths int V^2 dt is taken over and
+# whether the turns of v and V mark the step (a multi-step always marks them: see resume).
+_MULTI_ROWS = tuple((getattr(LANE, name), getattr(LANE, "alt_" + name)) for name in (
+    "mxx", "mxv", "mxe", "mxs", "mxc", "mvx", "mvv", "mve", "mvs", "mvc",
+    "mex", "mev", "mee", "mes", "mec", "cos_step", "sin_step", "half_h", "h2_6",
+    "turn_floor"))
+
+
+@njit(**JIT)
+def multi_steps(p):
+    """Steps a multi-step of a point of parameter row ``p`` takes (resume): PARAM.multi
+    where the lane's steps clear of the stops are the linear map (switches located, a
+    rigid stop, no latched law), else 1."""
+    if (p[PARAM.multi] > 1.0 and p[PARAM.locate] != 0.0 and p[PARAM.stop_ratio] == 0.0
+            and p[PARAM.latch] == 0.0 and p[PARAM.lower_latch] == 0.0):
+        return float(int(p[PARAM.multi]))
+    return 1.0
+
+
+@njit(**JIT)
+def _load_multi(L, j, m, r, n_steps, h):
+    """The alt_ rows of lane ``j``: a multi-step of ``r`` contact-free steps, whose
+    increment (3 x 5, as m's: tip_mass.free_step_map) is found by taking the r steps from
+    each basis vector of (x, v, V, sin, cos), the forcing rotated a step at a time as the
+    lane loop rotates it; its increments are summed, not I + D formed (see free_step_map)."""
+    cb, sb = L[LANE.cos_step + j], L[LANE.sin_step + j]
+    for i in range(5):
+        z = np.zeros(5)
+        z[i] = 1.0
+        total = np.zeros(3)
+        for _ in range(int(r)):
+            inc = m @ z
+            z[:3] += inc
+            total += inc
+            z[3], z[4] = z[3] * cb + z[4] * sb, z[4] * cb - z[3] * sb
+        for c, row in enumerate((LANE.alt_mxx, LANE.alt_mvx, LANE.alt_mex)):
+            L[row + i * LANES + j] = total[c]
+    L[LANE.alt_cos_step + j] = math.cos(2.0 * math.pi * r / n_steps)
+    L[LANE.alt_sin_step + j] = math.sin(2.0 * math.pi * r / n_steps)
+    L[LANE.alt_half_h + j], L[LANE.alt_h2_6 + j] = 0.5 * r * h, (r * h) ** 2 / 6.0
+    L[LANE.alt_turn_floor + j] = 0.0
+
+
+@njit(inline="always", **JIT)
+def _swap_multi(L, j):
+    """Swap lane ``j``'s rows of one step and of a multi-step (_MULTI_ROWS)."""
+    for a, b in _MULTI_ROWS:
+        L[a + j], L[b + j] = L[b + j], L[a + j]
+    L[LANE.mode + j] = 1.0 - L[LANE.mode + j]
+
+
+@njit(**JIT)
+def resume(L, j, it):
+    """Lane ``j``, whose next step is in iteration ``it``, takes multi-steps from there
+    where it can: LANE.multi > 1, out of contact, no quarter steps due, and room for one
+    before its next stop (LANE.k_end: a resync or the period's end, which it takes in
+    single steps).
+
+    A multi-step is the composition of LANE.multi contact-free steps: the same map as
+    the steps one at a time, up to rounding, at the cost of one. The lane loop marks it as
+    it marks a step: where it ends in contact, past the mirror's threshold, with a turn of
+    v or V inside (always, booked or not: a swing's top inside it may graze the stop) or
+    at LANE.k_end, here the iteration of the multi-step that would reach the next stop.
+    finish_step then takes it apart (_take_apart): it is redone as single steps, so that
+    every switch, extremum and period end is found and finished as a step finds it."""
+    r = L[LANE.multi + j]
+    if r <= 1.0 or L[LANE.mode + j] != 0.0 or L[LANE.on + j] != 0.0 or L[LANE.fine + j] != 0.0:
+        return
+    whole = math.floor((L[LANE.k_end + j] - it) / r)  # (the last step a single one)
+    if whole < 1.0:
+        return
+    _swap_multi(L, j)
+    L[LANE.multi_since + j] = it
+    L[LANE.k_end + j] = it + whole
+
+
+@njit(**JIT)
+def _take_apart(L, j, it):
+    """Lane ``j``'s multi-step of iteration ``it`` is marked: the lane goes back to single
+    steps, its counts of steps (LANE.k0, LANE.t_since, in iterations) moved back by the
+    steps its multi-steps took beyond one each, and its trial step is this iteration's
+    single step. It takes single steps until past LANE.hold, the last step the multi-step
+    spanned, unless what it was taken apart for comes sooner (finish_step)."""
+    r = L[LANE.multi + j]
+    extra = (r - 1.0) * (it - L[LANE.multi_since + j])
+    L[LANE.k0 + j] -= extra
+    L[LANE.t_since + j] -= extra
+    _swap_multi(L, j)
+    L[LANE.hold + j] = it + r - 1.0
+    x, v, V, s0, c0 = _state(L, j)
+    L[LANE.x_trial + j] = x + _increment(L, LANE.mxx + j, x, v, V, s0, c0)
+    L[LANE.v_trial + j] = v + _increment(L, LANE.mvx + j, x, v, V, s0, c0)
+    L[LANE.voltage_trial + j] = V + _increment(L, LANE.mex + j, x, v, V, s0, c0)
+
+
 @njit(**JIT)
 def new_table():
     """A lane table of zeros, aligned to 64 bytes: no vector load of a row straddles two
@@ -112,6 +208,10 @@ def load(L, j, p, y, it):
             L[row + c * LANES + j] = m[r, c]
     L[LANE.steps + j], L[LANE.locate + j] = n_steps, p[PARAM.locate]
     L[LANE.turn_floor + j] = 0.0 if p[PARAM.book] != 0.0 else -np.inf
+    r = multi_steps(p)
+    L[LANE.multi + j], L[LANE.mode + j], L[LANE.hold + j] = r, 0.0, -np.inf
+    if r > 1.0:
+        _load_multi(L, j, m, r, n_steps, h)
     L[LANE.phase + j] = p[PARAM.phase]
     x, v, V = y[STATE.x], y[STATE.v], y[STATE.voltage]
     vimp = y[STATE.approach_velocity]
@@ -190,7 +290,8 @@ def _start_period(L, j, it):
 # Rows that change sign when a lane mirrors: the state, the forcing, the contact-free map's
 # forcing columns, the mirror's own threshold and the state's derivative (tangents).
 _NEGATED = (LANE.x, LANE.v, LANE.voltage, LANE.amplitude, LANE.mxs, LANE.mxc, LANE.mvs,
-            LANE.mvc, LANE.mes, LANE.mec, LANE.flip_below) + tuple(
+            LANE.mvc, LANE.mes, LANE.mec, LANE.alt_mxs, LANE.alt_mxc, LANE.alt_mvs,
+            LANE.alt_mvc, LANE.alt_mes, LANE.alt_mec, LANE.flip_below) + tuple(
                 range(LANE.txx, LANE.tee + LANES, LANES))
 # Rows of the stop in use and of the other one, swapped when a lane mirrors.
 _SWAPPED = ((LANE.gap, LANE.gap_other), (LANE.kh, LANE.kh_other), (LANE.khm, LANE.khm_other),
@@ -238,25 +339,66 @@ def lane_steps(L, groups, it):
     for :func:`finish_step`. Returns the number of lanes with a point marked, and how
     many of them take quarter steps (see quarter_steps).
     """
-    touching = _trial_group(L, 0)
+    _trial_steps(L, 0)
     if groups > 1:  # (else the second group is idle: no lane in contact)
-        touching += _trial_group(L, GROUP)
-    if touching == 0.0:
+        _trial_steps(L, GROUP)
+    if _contact_steps(L, groups * GROUP) == 0:
         return _commit_steps(L, False, it)
     return _commit_steps(L, True, it)
 
 
 @njit(inline="always", **JIT)
-def _trial_group(L, j0):
-    """The RK4 stages of group j0 (see lane_steps); returns how many of its lanes touch."""
-    touching = 0.0
-    for j in range(j0, j0 + GROUP):
-        touching += L[LANE.on + j]
-    if touching == 0.0:
-        _trial_steps(L, j0, False)
-    else:
-        _trial_steps(L, j0, True)
-    return touching
+def _contact_steps(L, lanes):
+    """The trial step of the first ``lanes`` lanes that are in contact: the RK4 stages with
+    the contact force, in vector code on whole blocks of BLOCK lanes packed as the
+    quarter steps' (the last padded with copies of the first), so that a step in contact
+    costs a lane of a block, not a group; returns how many lanes are in contact."""
+    n = 0
+    for j in range(lanes):
+        if L[LANE.on + j] == 0.0:
+            continue
+        L[LANE.q_lane + n] = j
+        for packed, row in _QUARTER_ROWS:
+            L[packed + n] = L[row + j]
+        L[LANE.q_cos_half + n], L[LANE.q_sin_half + n] = L[LANE.cos_half + j], L[LANE.sin_half + j]
+        L[LANE.q_dt + n] = L[LANE.h + j]
+        n += 1
+    if n == 0:
+        return 0
+    blocks = (n + BLOCK - 1) // BLOCK
+    for k in range(n, blocks * BLOCK):
+        for r in range(LANE.q_lane, LANE.q_thc + LANES, LANES):
+            L[r + k] = L[r]
+    _contact_block(L, 0)
+    if blocks > 1:
+        _contact_block(L, BLOCK)
+    if blocks > 2:
+        _contact_block(L, 2 * BLOCK)
+    if blocks > 3:
+        _contact_block(L, 3 * BLOCK)
+    for k in range(n):
+        j = int(L[LANE.q_lane + k])
+        L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = (
+            L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k])
+    return n
+
+
+@njit(inline="always", **JIT)
+def _contact_block(L, b):
+    """One RK4 step with the contact force of the packed lanes b, ..., b + BLOCK - 1 (see
+    _contact_steps), the forcing at its middle and end by rotating the phase by half a
+    step; written out, as LLVM vectorizes only a loop without an inner loop."""
+    for k in range(b, b + BLOCK):
+        x, v, V, s0, c0 = (L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k],
+                           L[LANE.q_sin + k], L[LANE.q_cos + k])
+        A, ca, sa = L[LANE.q_amplitude + k], L[LANE.q_cos_half + k], L[LANE.q_sin_half + k]
+        sm = s0 * ca + c0 * sa
+        s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+        coef = Coefficients(L[LANE.q_wn2 + k], L[LANE.q_cm + k], L[LANE.q_thm + k],
+                            L[LANE.q_khm + k], L[LANE.q_gap + k], L[LANE.q_ch + k],
+                            L[LANE.q_irc + k], L[LANE.q_thc + k])
+        x, v, V, _, _ = rk4(x, v, V, L[LANE.q_dt + k], A * s0, A * sm, A * s1, coef)
+        L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k] = x, v, V
 
 
 @njit(inline="always", **JIT)
@@ -284,44 +426,15 @@ def _half_phases(s0, c0, ca, sa):
 
 
 @njit(inline="always", **JIT)
-def _trial_steps(L, j0, contact):
-    """The trial step of group j0's lanes: the contact-free map (see the rows LANE.mxx...),
-    and with ``contact`` the RK4 stages with the contact force for the lanes in contact,
-    chosen lane by lane (a lane out of contact gets the same bits either way)."""
+def _trial_steps(L, j0):
+    """The trial step of group j0's lanes by the contact-free map (see the rows
+    LANE.mxx...); _contact_steps replaces it for the lanes in contact."""
     for j in range(j0, j0 + GROUP):
         x, v, V, s0, c0 = _state(L, j)
         xn = x + _increment(L, LANE.mxx + j, x, v, V, s0, c0)
         vn = v + _increment(L, LANE.mvx + j, x, v, V, s0, c0)
         Vn = V + _increment(L, LANE.mex + j, x, v, V, s0, c0)
         L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = xn, vn, Vn
-    if contact:
-        for j in range(j0, j0 + GROUP):
-            x, v, V, s0, c0 = _state(L, j)
-            A, ca, sa = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j]
-            sm = s0 * ca + c0 * sa
-            s1 = sm * ca + (c0 * ca - s0 * sa) * sa
-            on = L[LANE.on + j]
-            coef = Coefficients(
-                L[LANE.wn2 + j],
-                L[LANE.cm + j],
-                L[LANE.thm + j],
-                on * L[LANE.khm + j],
-                L[LANE.gap + j],
-                L[LANE.ch + j],
-                L[LANE.irc + j],
-                L[LANE.thc + j],
-            )
-            xc, vc, Vc, _, _ = rk4(x, v, V, L[LANE.h + j], A * s0, A * sm, A * s1, coef)
-            L[LANE.x_contact + j], L[LANE.v_contact + j], L[LANE.voltage_contact + j] = xc, vc, Vc
-        # (chosen in a loop of its own: with the choice in the loop above, LLVM left that
-        # loop scalar)
-        for j in range(j0, j0 + GROUP):
-            free = L[LANE.on + j] == 0.0
-            L[LANE.x_trial + j] = L[LANE.x_trial + j] if free else L[LANE.x_contact + j]
-            L[LANE.v_trial + j] = L[LANE.v_trial + j] if free else L[LANE.v_contact + j]
-            L[LANE.voltage_trial + j] = (
-                L[LANE.voltage_trial + j] if free else L[LANE.voltage_contact + j]
-            )
 
 
 @njit(inline="always", **JIT)
@@ -536,9 +649,29 @@ def finish_step(L, j, it):
     s0, c0 = L[LANE.sin + j], L[LANE.cos + j]  # the forcing phase at the start of the step
     if L[LANE.stop_ratio + j] > 0.0:
         stop_motion.step(L, j)
-    else:
-        _finish_rigid(L, j, it)
-    return _next_phase(L, j, it, s0, c0)
+        return _next_phase(L, j, it, s0, c0)
+    if L[LANE.mode + j] != 0.0:
+        _take_apart(L, j, it)
+    # (an extremum inside the step, or the lane mirrored: what a multi-step was taken
+    # apart for, likely)
+    v, dV, sign = L[LANE.v + j], _voltage_rate_of(L, j), L[LANE.sign + j]
+    _finish_rigid(L, j, it)
+    turned = (v * L[LANE.v + j] * sign * L[LANE.sign + j] <= 0.0
+              or dV * _voltage_rate_of(L, j) * sign * L[LANE.sign + j] <= 0.0
+              or sign != L[LANE.sign + j])
+    ended = _next_phase(L, j, it, s0, c0)
+    if not ended and L[LANE.multi + j] > 1.0:
+        if it >= L[LANE.hold + j] or turned:
+            resume(L, j, it + 1.0)
+        elif L[LANE.on + j] == 0.0:  # (come back once past what it was taken apart for)
+            L[LANE.k_end + j] = min(L[LANE.k_end + j], L[LANE.hold + j])
+    return ended
+
+
+@njit(inline="always", **JIT)
+def _voltage_rate_of(L, j):
+    """dV/dt [V/s] of lane ``j``'s state."""
+    return voltage_rate(L[LANE.voltage + j], L[LANE.v + j], L[LANE.irc + j], L[LANE.thc + j])
 
 
 @njit(inline="always", **JIT)
@@ -779,6 +912,7 @@ def end_period(L, j, p, ring, acc, gaps, ring_len, n_strobe, settle, it):
             return STATUS.settled, orbit
     if n >= int(p[PARAM.max_periods]):
         return STATUS.not_settled, 0
+    resume(L, j, it + 1.0)
     return -1, 0
 
 
@@ -846,6 +980,7 @@ def idle(L, j):
     L[LANE.stop_ratio + j], L[LANE.stop_on + j] = 0.0, 0.0
     L[LANE.stop_x + j], L[LANE.stop_v + j] = 0.0, 0.0
     L[LANE.tangents + j] = 0.0
+    L[LANE.multi + j], L[LANE.mode + j] = 1.0, 0.0
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = 0.0, 1.0, 1.0
     for r in range(LANE.mxx, LANE.mec + LANES, LANES):
         L[r + j] = 0.0
@@ -854,6 +989,7 @@ def idle(L, j):
 @njit(**JIT)
 def take(L, j, params, states, pt, ring, acc, gaps, it):
     load(L, j, params[pt], states[pt], it)
+    resume(L, j, it)
     s = L[LANE.sign + j]
     ring[j, 0, STATE.x], ring[j, 0, STATE.v] = s * L[LANE.x + j], s * L[LANE.v + j]
     ring[j, 0, STATE.voltage] = s * L[LANE.voltage + j]

@@ -72,6 +72,8 @@ PARAM = layout("ParameterRow", (
              "BOOKED_METRICS) [-]"),
     ("tangents", "1: the run carries the derivative of its end state by its start state, "
                  "the monodromy (lanes that can: tangents.carried), 0: not [-]"),
+    ("multi", "steps a lane takes at once clear of the stops (lanes.resume; lanes that "
+              "can: lanes.multi_steps), 1 or 0: one at a time [-]"),
 ))
 #: PARAM.lower_gap of a point without a lower stop [m]: far beyond any motion, finite
 #: (the kernel's arithmetic stays finite).
@@ -217,7 +219,8 @@ LANE = layout("LaneTable", (
     # ... and the lanes that take quarter steps, packed (lanes._quarter_steps): their
     # lane, state, forcing phase and parameters.
     ("q_lane", ""), ("q_x", ""), ("q_v", ""), ("q_voltage", ""), ("q_sin", ""), ("q_cos", ""),
-    ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_dt", ""),
+    ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_cos_half", ""),
+    ("q_sin_half", ""), ("q_dt", ""),
     ("q_wn2", ""), ("q_cm", ""), ("q_thm", ""), ("q_khm", ""), ("q_gap", ""), ("q_ch", ""),
     ("q_irc", ""), ("q_thc", ""),
     # ... and, out of the lane loop's way, rows read only at a period's start and end: the
@@ -254,4 +257,15 @@ LANE = layout("LaneTable", (
     ("txx", ""), ("txv", ""), ("txe", ""),
     ("tvx", ""), ("tvv", ""), ("tve", ""),
     ("tex", ""), ("tev", ""), ("tee", ""),
-), stride=LANES)
+    # ... and the multi-step: clear of the stops a lane may take PARAM.multi steps an
+    # iteration, the composition of as many contact-free steps (lanes.resume), with the
+    # rows of SWAPPED for it; the rows of the mode not in use wait in the alt_ rows.
+    ("multi", "steps a multi-step takes; 1: the lane takes one step at a time"),
+    ("mode", "1: the lane takes multi-steps, its rows of SWAPPED those of a multi-step"),
+    ("multi_since", "iteration of the lane's first multi-step since it last took one step"),
+    ("hold", "iteration up to which the lane takes single steps after a multi-step it "
+             "took apart"),
+) + tuple(("alt_" + name, "") for name in (
+    "mxx", "mxv", "mxe", "mxs", "mxc", "mvx", "mvv", "mve", "mvs", "mvc",
+    "mex", "mev", "mee", "mes", "mec", "cos_step", "sin_step", "half_h", "h2_6",
+    "turn_floor")), stride=LANES)

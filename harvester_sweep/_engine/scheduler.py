@@ -366,6 +366,7 @@ def record_series(row: np.ndarray, state: np.ndarray, periods: int) -> np.ndarra
     """
     row = row.copy()
     row[PARAM.max_periods] = periods
+    row[PARAM.multi] = 1.0  # (every step recorded)
     n_steps = int(row[PARAM.steps])
     series = np.empty((periods * n_steps + 1, len(SERIES)))
     _run_queue(row[None, :], state.copy()[None, :], np.empty((1, len(METRIC))),
