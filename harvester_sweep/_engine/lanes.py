@@ -2,12 +2,14 @@
 
 The plain RK4 step of every lane runs in branch-free loops over groups of GROUP lanes,
 which LLVM compiles to vector code: out of contact the step is linear, and is applied as
-the matrix it is (tip_mass.free_step_map); a group with a lane in contact also runs the RK4
-stages with the contact force. The rare steps that need more (a contact switch to locate,
-graded sub-steps next to a touch or a separation, an extremum or a force peak to place,
-the end of a forcing period) are marked and finished lane by lane in scalar code
-(:func:`finish_step`); the steps just after a touch and before a separation, in quarter
-steps, run first, in vector code on the lanes that take them, packed (quarter_steps).
+the matrix it is (tip_mass.free_step_map), or as the matrix of several such steps at once
+(a multi-step: :func:`resume`); the lanes in contact run the RK4 stages with the contact
+force packed into vector blocks (_contact_steps). The rare steps that need more (a contact
+switch to locate, graded sub-steps next to a touch or a separation, an extremum or a force
+peak to place, the end of a forcing period) are marked and finished lane by lane in scalar
+code (:func:`finish_step`); the steps just after a touch and before a separation, in
+quarter steps, run first, in vector code on the lanes that take them, packed
+(quarter_steps).
 
 A point's result does not depend on its lane: every lane runs the same vector
 instructions, and which steps run scalar code is decided by the point's own state (see
@@ -66,15 +68,25 @@ _MULTI_ROWS = tuple((getattr(LANE, name), getattr(LANE, "alt_" + name)) for name
     "turn_floor"))
 
 
+# Multi-steps a period at least [-]: int V^2 dt is booked on the cubic Hermite
+# interpolant over a multi-step, whose error grows as the fourth power of its length; at
+# this many a period it stays about that of the RK4 steps themselves (whose error is
+# what the step-halving estimate measures, and which a multi-step does not change).
+MULTI_SPAN = 256.0
+
+
 @njit(**JIT)
 def multi_steps(p):
-    """Steps a multi-step of a point of parameter row ``p`` takes (resume): PARAM.multi
-    where the lane's steps clear of the stops are the linear map (switches located, a
-    rigid stop, no latched law), else 1."""
-    if (p[PARAM.multi] > 1.0 and p[PARAM.locate] != 0.0 and p[PARAM.stop_ratio] == 0.0
+    """Steps a multi-step of a point of parameter row ``p`` takes (resume): PARAM.multi,
+    halved until the period holds MULTI_SPAN of them, where the lane's steps clear of the
+    stops are the linear map (switches located, a rigid stop, no latched law); else 1."""
+    if not (p[PARAM.locate] != 0.0 and p[PARAM.stop_ratio] == 0.0
             and p[PARAM.latch] == 0.0 and p[PARAM.lower_latch] == 0.0):
-        return float(int(p[PARAM.multi]))
-    return 1.0
+        return 1.0
+    r = float(int(p[PARAM.multi]))
+    while r > 1.0 and p[PARAM.steps] < MULTI_SPAN * r:
+        r = math.floor(r / 2.0)
+    return max(r, 1.0)
 
 
 @njit(**JIT)
@@ -327,13 +339,12 @@ def lane_steps(L, groups, it):
 
     The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
     vectors), written out with constant bounds so that it compiles to vector code only.
-    A lane out of contact steps by the RK4 step's linear map (tip_mass.free_step_map, 15
-    multiply-adds and 3 adds); a group with a lane in contact also runs the RK4 stages with the
-    contact force, and each lane takes the one that applies to it, so that a point gets
-    the same bits whatever its neighbours. Two groups rather than one block of LANES,
-    because a block is more often in contact; not four groups of one vector, whose
-    contact-free loop LLVM compiled to scalar code once the trial step got short. A
-    second loop commits: lanes whose
+    Every lane steps by the RK4 step's linear map (tip_mass.free_step_map, 15 multiply-adds
+    and 3 adds; a multi-step's in multi-step mode); the lanes in contact then replace it by
+    the RK4 stages with the contact force, run on them alone, packed (_contact_steps), so
+    that a point gets the same bits whatever its neighbours and a contact costs its lane,
+    not its group. Not four groups of one vector, whose contact-free loop LLVM compiled to
+    scalar code once the trial step got short. A second loop commits: lanes whose
     step needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in LANE.need and left
     for :func:`finish_step`. Returns the number of lanes with a point marked, and how

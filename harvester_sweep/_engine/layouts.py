@@ -144,7 +144,7 @@ ACC = layout("Accumulators", (
 ))
 
 #: Points stepped together by one thread, and lanes that take the contact-free code together
-#: (lanes._lane_steps writes out 2 groups).
+#: (lanes.lane_steps writes out 2 groups).
 LANES = 16
 GROUP = 8
 assert LANES == 2 * GROUP
@@ -181,9 +181,6 @@ LANE = layout("LaneTable", (
     ("v_trial", "v after the trial step [m/s]"),
     ("voltage_trial", "V after the trial step [V]"),
     ("need", "1: the step is finished in scalar code"),
-    ("x_contact", "x after the trial step with the contact force [m]"),
-    ("v_contact", "v after the trial step with the contact force [m/s]"),
-    ("voltage_contact", "V after the trial step with the contact force [V]"),
     # ... the parameters the lane loop reads ...
     ("amplitude", "A [m/s^2]"),
     ("wn2", "wn^2 [1/s^2]"),
@@ -216,8 +213,9 @@ LANE = layout("LaneTable", (
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),
     ("mvx", ""), ("mvv", ""), ("mve", ""), ("mvs", ""), ("mvc", ""),
     ("mex", ""), ("mev", ""), ("mee", ""), ("mes", ""), ("mec", ""),
-    # ... and the lanes that take quarter steps, packed (lanes._quarter_steps): their
-    # lane, state, forcing phase and parameters.
+    # ... and the lanes that take a step in contact or quarter steps, packed in turn
+    # (lanes._contact_steps, lanes.quarter_steps): their lane, state, forcing phase and
+    # parameters.
     ("q_lane", ""), ("q_x", ""), ("q_v", ""), ("q_voltage", ""), ("q_sin", ""), ("q_cos", ""),
     ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_cos_half", ""),
     ("q_sin_half", ""), ("q_dt", ""),

@@ -128,7 +128,10 @@ def test_sweep_power_whatever_the_outputs_stored():
 def test_runs_without_booking_round_alike():
     """A run that books no extrema or force peaks (Newton's perturbed copies) follows the
     same motion to rounding, with the same impacts and power, and its extrema and force
-    metrics NaN rather than wrong."""
+    metrics NaN rather than wrong. (Its power to int V^2 dt's quadrature, not to rounding:
+    a booked run goes back to multi-steps as soon as the turn it took one apart for is
+    placed, an unbooked one a multi-step's span later, so that the two sum int V^2 dt over
+    different spans: lanes.resume.)"""
     points = [resolve_parameters("paper", gap=g, frequency=f, max_periods=4,
                                  settle_tolerance=1e-300)
               for g in (0.5e-6, 2e-6, 1.0) for f in (130.0, 160.0, 200.0)]
@@ -143,7 +146,7 @@ def test_runs_without_booking_round_alike():
     (booked, m1), (plain, m0) = ends[1.0], ends[0.0]
     scale = np.abs(booked[:, :3]).max(axis=0)
     np.testing.assert_allclose(plain[:, :3] / scale, booked[:, :3] / scale, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(m0[:, METRIC.power], m1[:, METRIC.power], rtol=1e-12)
+    np.testing.assert_allclose(m0[:, METRIC.power], m1[:, METRIC.power], rtol=1e-9)
     np.testing.assert_array_equal(m0[:, METRIC.impacts_per_period],
                                   m1[:, METRIC.impacts_per_period])
     assert (m1[:, METRIC.impacts_per_period] > 0).any()

@@ -219,11 +219,11 @@ def test_a_re_solve_finds_the_orbit_and_multipliers_of_its_step():
     a finer step from the orbit its estimate located, its copies run both ways at once:
     its orbit and Floquet multipliers are those a solve from rest finds with that step
     given (Newton's floor, and central differences taken within 1e-7 of the orbit)."""
-    result = run_scene("strong_coupling", frequency=140.0, gap=1e-6)
+    result = run_scene("strong_coupling", frequency=140.0, gap=0.5e-6)
     m = result.metrics
     assert result.parameters["steps_per_period"] < m["steps_per_period"]  # (was re-solved)
     assert m["impacts_per_period"] > 0
-    given = run_scene("strong_coupling", frequency=140.0, gap=1e-6,
+    given = run_scene("strong_coupling", frequency=140.0, gap=0.5e-6,
                       steps_per_period=m["steps_per_period"]).metrics
     assert m["orbit_period"] == given["orbit_period"]
     for name in ("power", "v_peak", "x_max"):
