@@ -132,18 +132,31 @@ def resume(L, j, it):
     the steps one at a time, up to rounding, at the cost of one. The lane loop marks it as
     it marks a step: where it ends in contact, past the mirror's threshold, with a turn of
     v or V inside (always, booked or not: a swing's top inside it may graze the stop) or
-    at LANE.k_end, here the iteration of the multi-step that would reach the next stop.
-    finish_step then takes it apart (_take_apart): it is redone as single steps, so that
-    every switch, extremum and period end is found and finished as a step finds it."""
+    at LANE.k_end, here the iteration of the last multi-step up to the next stop (which it
+    reaches where the steps left are a multiple of LANE.multi). finish_step finishes it
+    whole where it holds nothing but turns clear of the stop, or the stop at its end
+    (_turns_only); else it takes it apart (_take_apart): it is redone as single steps, so
+    that every switch, near miss and period end is found and finished as a step finds it."""
     r = L[LANE.multi + j]
     if r <= 1.0 or L[LANE.mode + j] != 0.0 or L[LANE.on + j] != 0.0 or L[LANE.fine + j] != 0.0:
         return
-    whole = math.floor((L[LANE.k_end + j] - it) / r)  # (the last step a single one)
+    whole = math.floor((L[LANE.k_end + j] - it + 1.0) / r)  # (up to the stop's step)
     if whole < 1.0:
         return
     _swap_multi(L, j)
     L[LANE.multi_since + j] = it
-    L[LANE.k_end + j] = it + whole
+    L[LANE.k_end + j] = it + whole - 1.0
+
+
+@njit(inline="always", **JIT)
+def _leave_multi(L, j, it):
+    """Lane ``j``, whose multi-steps ran up to iteration ``it`` (not included), goes back to
+    single steps: its counts of steps (LANE.k0, LANE.t_since, in iterations) move back by
+    the steps its multi-steps took beyond one each."""
+    extra = (L[LANE.multi + j] - 1.0) * (it - L[LANE.multi_since + j])
+    L[LANE.k0 + j] -= extra
+    L[LANE.t_since + j] -= extra
+    _swap_multi(L, j)
 
 
 @njit(**JIT)
@@ -153,12 +166,8 @@ def _take_apart(L, j, it):
     steps its multi-steps took beyond one each, and its trial step is this iteration's
     single step. It takes single steps until past LANE.hold, the last step the multi-step
     spanned, unless what it was taken apart for comes sooner (finish_step)."""
-    r = L[LANE.multi + j]
-    extra = (r - 1.0) * (it - L[LANE.multi_since + j])
-    L[LANE.k0 + j] -= extra
-    L[LANE.t_since + j] -= extra
-    _swap_multi(L, j)
-    L[LANE.hold + j] = it + r - 1.0
+    _leave_multi(L, j, it)
+    L[LANE.hold + j] = it + L[LANE.multi + j] - 1.0
     x, v, V, s0, c0 = _state(L, j)
     L[LANE.x_trial + j] = x + _increment(L, LANE.mxx + j, x, v, V, s0, c0)
     L[LANE.v_trial + j] = v + _increment(L, LANE.mvx + j, x, v, V, s0, c0)
@@ -350,12 +359,32 @@ def lane_steps(L, groups, it):
     for :func:`finish_step`. Returns the number of lanes with a point marked, and how
     many of them take quarter steps (see quarter_steps).
     """
-    _trial_steps(L, 0)
+    touching = _trial_group(L, 0)
     if groups > 1:  # (else the second group is idle: no lane in contact)
-        _trial_steps(L, GROUP)
-    if _contact_steps(L, groups * GROUP) == 0:
+        touching += _trial_group(L, GROUP)
+    if touching == 0.0:
         return _commit_steps(L, False, it)
+    _contact_steps(L, groups * GROUP)
     return _commit_steps(L, True, it)
+
+
+# Lanes of a group in contact from which the group runs the contact stages on all its
+# lanes, rather than on those lanes packed into blocks (_contact_steps): a group's stages
+# cost about as much as packing and running that many lanes [-].
+CROWD = 4.0
+
+
+@njit(inline="always", **JIT)
+def _trial_group(L, j0):
+    """The trial step of group j0 (see lane_steps), with the contact stages on all its
+    lanes where CROWD of them are in contact; returns how many are."""
+    touching = 0.0
+    for j in range(j0, j0 + GROUP):
+        touching += L[LANE.on + j]
+    _trial_steps(L, j0)
+    if touching >= CROWD:
+        _group_contact(L, j0)
+    return touching
 
 
 @njit(inline="always", **JIT)
@@ -366,7 +395,7 @@ def _contact_steps(L, lanes):
     costs a lane of a block, not a group; returns how many lanes are in contact."""
     n = 0
     for j in range(lanes):
-        if L[LANE.on + j] == 0.0:
+        if L[LANE.on + j] == 0.0 or _crowded(L, j - j % GROUP):
             continue
         L[LANE.q_lane + n] = j
         for packed, row in _QUARTER_ROWS:
@@ -392,6 +421,40 @@ def _contact_steps(L, lanes):
         L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = (
             L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k])
     return n
+
+
+@njit(inline="always", **JIT)
+def _crowded(L, j0):
+    """Whether group j0 runs the contact stages on all its lanes (CROWD)."""
+    touching = 0.0
+    for j in range(j0, j0 + GROUP):
+        touching += L[LANE.on + j]
+    return touching >= CROWD
+
+
+@njit(inline="always", **JIT)
+def _group_contact(L, j0):
+    """The RK4 stages with the contact force of every lane of group j0, each lane in
+    contact taking them for its trial step (the same bits as in a packed block)."""
+    for j in range(j0, j0 + GROUP):
+        x, v, V, s0, c0 = _state(L, j)
+        A, ca, sa = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j]
+        sm = s0 * ca + c0 * sa
+        s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+        on = L[LANE.on + j]
+        coef = Coefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j],
+                            on * L[LANE.khm + j], L[LANE.gap + j], L[LANE.ch + j],
+                            L[LANE.irc + j], L[LANE.thc + j])
+        xc, vc, Vc, _, _ = rk4(x, v, V, L[LANE.h + j], A * s0, A * sm, A * s1, coef)
+        L[LANE.x_contact + j], L[LANE.v_contact + j], L[LANE.voltage_contact + j] = xc, vc, Vc
+    # (chosen in a loop of its own: with the choice in the loop above, LLVM left that loop
+    # scalar)
+    for j in range(j0, j0 + GROUP):
+        free = L[LANE.on + j] == 0.0
+        L[LANE.x_trial + j] = L[LANE.x_trial + j] if free else L[LANE.x_contact + j]
+        L[LANE.v_trial + j] = L[LANE.v_trial + j] if free else L[LANE.v_contact + j]
+        L[LANE.voltage_trial + j] = (
+            L[LANE.voltage_trial + j] if free else L[LANE.voltage_contact + j])
 
 
 @njit(inline="always", **JIT)
@@ -662,6 +725,19 @@ def finish_step(L, j, it):
         stop_motion.step(L, j)
         return _next_phase(L, j, it, s0, c0)
     if L[LANE.mode + j] != 0.0:
+        if _turns_only(L, j, it):
+            cb, sb = L[LANE.cos_step + j], L[LANE.sin_step + j]  # (a multi-step's)
+            L[LANE.sin + j], L[LANE.cos + j] = s0 * cb + c0 * sb, c0 * cb - s0 * sb
+            if it < L[LANE.k_end + j]:
+                return False
+            # its last multi-step before the lane's stop: single steps from here
+            _leave_multi(L, j, it + 1.0)
+            k, n_steps = it + 1.0 - L[LANE.k0 + j], L[LANE.steps + j]
+            sync = SYNC * math.floor(k / SYNC)
+            if k == sync or k >= n_steps:  # (at the stop: a resync or the period's end)
+                return _next_phase(L, j, it, s0, c0)
+            L[LANE.k_end + j] = L[LANE.k0 + j] + min(sync + SYNC, n_steps) - 1.0
+            return False
         _take_apart(L, j, it)
     # (an extremum inside the step, or the lane mirrored: what a multi-step was taken
     # apart for, likely)
@@ -677,6 +753,43 @@ def finish_step(L, j, it):
         elif L[LANE.on + j] == 0.0:  # (come back once past what it was taken apart for)
             L[LANE.k_end + j] = min(L[LANE.k_end + j], L[LANE.hold + j])
     return ended
+
+
+# A top of a swing inside a multi-step within this of the stop (relative to the larger of
+# the two) takes the multi-step apart, so that single steps decide whether it touches: the
+# cubic Hermite interpolant over a multi-step places the top to about 1e-9 of the amplitude
+# at MULTI_SPAN multi-steps a period [-].
+NEAR_TOP = 1e-6
+
+
+@njit(**JIT)
+def _turns_only(L, j, it):
+    """Finish lane ``j``'s marked multi-step of iteration ``it`` whole, its forcing phase
+    left to the caller, where it holds nothing but turns of x or V clear of the stop or
+    the lane's stop (LANE.k_end) at its end: the turns' extrema are placed on the cubic
+    Hermite interpolant over the multi-step (as a step's over the step) and the step is
+    committed as the lane loop commits one; returns whether it was. A multi-step that ends
+    in contact or past the mirror's threshold, or whose top of a swing comes within
+    NEAR_TOP of the stop, is left to be taken apart."""
+    x, v, V, _, _ = _state(L, j)
+    xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
+    g, ch, khm = L[LANE.gap + j], L[LANE.ch + j], L[LANE.khm + j]
+    if in_contact(xn, vn, g, ch) or xn < L[LANE.flip_below + j]:
+        return False
+    span = L[LANE.multi + j] * L[LANE.h + j]
+    near = g if khm > 0.0 else np.inf
+    if v > 0.0 >= vn and hermite.extremum(x, v, xn, vn, span) >= near - NEAR_TOP * max(
+            abs(near), abs(x)):
+        return False
+    irc, thc = L[LANE.irc + j], L[LANE.thc + j]
+    dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
+    fc = L[LANE.fc + j]
+    booking.extrema(L, j, x, v, V, dV, xn, vn, Vn, dVn, span, L[LANE.fc_previous + j], fc,
+                    0.0, L[LANE.sign + j] > 0.0, near)
+    L[LANE.q + j] += hermite.v2_integral(V, dV, Vn, dVn, L[LANE.half_h + j], L[LANE.h2_6 + j])
+    L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
+    L[LANE.fc_previous + j], L[LANE.fc + j] = fc, 0.0
+    return True
 
 
 @njit(inline="always", **JIT)

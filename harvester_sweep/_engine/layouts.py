@@ -181,6 +181,9 @@ LANE = layout("LaneTable", (
     ("v_trial", "v after the trial step [m/s]"),
     ("voltage_trial", "V after the trial step [V]"),
     ("need", "1: the step is finished in scalar code"),
+    ("x_contact", "x after the trial step with the contact force [m]"),
+    ("v_contact", "v after the trial step with the contact force [m/s]"),
+    ("voltage_contact", "V after the trial step with the contact force [V]"),
     # ... the parameters the lane loop reads ...
     ("amplitude", "A [m/s^2]"),
     ("wn2", "wn^2 [1/s^2]"),
