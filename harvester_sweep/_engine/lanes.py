@@ -3,8 +3,8 @@
 The plain RK4 step of every lane runs in branch-free loops over groups of GROUP lanes,
 which LLVM compiles to vector code: out of contact the step is linear, and is applied as
 the matrix it is (tip_mass.free_step_map), or as the matrix of several such steps at once
-(a multi-step: :func:`resume`); the lanes in contact run the RK4 stages with the contact
-force packed into vector blocks (_contact_steps). The rare steps that need more (a contact
+(a multi-step: :func:`resume`); a group with a lane in contact also runs the RK4 stages
+with the contact force. The rare steps that need more (a contact
 switch to locate, graded sub-steps next to a touch or a separation, an extremum or a force
 peak to place, the end of a forcing period) are marked and finished lane by lane in scalar
 code (:func:`finish_step`); the steps just after a touch and before a separation, in
@@ -348,12 +348,14 @@ def lane_steps(L, groups, it):
 
     The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
     vectors), written out with constant bounds so that it compiles to vector code only.
-    Every lane steps by the RK4 step's linear map (tip_mass.free_step_map, 15 multiply-adds
-    and 3 adds; a multi-step's in multi-step mode); the lanes in contact then replace it by
-    the RK4 stages with the contact force, run on them alone, packed (_contact_steps), so
-    that a point gets the same bits whatever its neighbours and a contact costs its lane,
-    not its group. Not four groups of one vector, whose contact-free loop LLVM compiled to
-    scalar code once the trial step got short. A second loop commits: lanes whose
+    A lane out of contact steps by the RK4 step's linear map (tip_mass.free_step_map, 15
+    multiply-adds and 3 adds; a multi-step's in multi-step mode: resume); a group with a
+    lane in contact also runs the RK4 stages with the contact force, and each lane takes
+    the one that applies to it, so that a point gets
+    the same bits whatever its neighbours. Two groups rather than one block of LANES,
+    because a block is more often in contact; not four groups of one vector, whose
+    contact-free loop LLVM compiled to scalar code once the trial step got short. A
+    second loop commits: lanes whose
     step needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in LANE.need and left
     for :func:`finish_step`. Returns the number of lanes with a point marked, and how
@@ -364,115 +366,20 @@ def lane_steps(L, groups, it):
         touching += _trial_group(L, GROUP)
     if touching == 0.0:
         return _commit_steps(L, False, it)
-    _contact_steps(L, groups * GROUP)
     return _commit_steps(L, True, it)
-
-
-# Lanes of a group in contact from which the group runs the contact stages on all its
-# lanes, rather than on those lanes packed into blocks (_contact_steps): a group's stages
-# cost about as much as packing and running that many lanes [-].
-CROWD = 4.0
 
 
 @njit(inline="always", **JIT)
 def _trial_group(L, j0):
-    """The trial step of group j0 (see lane_steps), with the contact stages on all its
-    lanes where CROWD of them are in contact; returns how many are."""
+    """The RK4 stages of group j0 (see lane_steps); returns how many of its lanes touch."""
     touching = 0.0
     for j in range(j0, j0 + GROUP):
         touching += L[LANE.on + j]
-    _trial_steps(L, j0)
-    if touching >= CROWD:
-        _group_contact(L, j0)
+    if touching == 0.0:
+        _trial_steps(L, j0, False)
+    else:
+        _trial_steps(L, j0, True)
     return touching
-
-
-@njit(inline="always", **JIT)
-def _contact_steps(L, lanes):
-    """The trial step of the first ``lanes`` lanes that are in contact: the RK4 stages with
-    the contact force, in vector code on whole blocks of BLOCK lanes packed as the
-    quarter steps' (the last padded with copies of the first), so that a step in contact
-    costs a lane of a block, not a group; returns how many lanes are in contact."""
-    n = 0
-    for j in range(lanes):
-        if L[LANE.on + j] == 0.0 or _crowded(L, j - j % GROUP):
-            continue
-        L[LANE.q_lane + n] = j
-        for packed, row in _QUARTER_ROWS:
-            L[packed + n] = L[row + j]
-        L[LANE.q_cos_half + n], L[LANE.q_sin_half + n] = L[LANE.cos_half + j], L[LANE.sin_half + j]
-        L[LANE.q_dt + n] = L[LANE.h + j]
-        n += 1
-    if n == 0:
-        return 0
-    blocks = (n + BLOCK - 1) // BLOCK
-    for k in range(n, blocks * BLOCK):
-        for r in range(LANE.q_lane, LANE.q_thc + LANES, LANES):
-            L[r + k] = L[r]
-    _contact_block(L, 0)
-    if blocks > 1:
-        _contact_block(L, BLOCK)
-    if blocks > 2:
-        _contact_block(L, 2 * BLOCK)
-    if blocks > 3:
-        _contact_block(L, 3 * BLOCK)
-    for k in range(n):
-        j = int(L[LANE.q_lane + k])
-        L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = (
-            L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k])
-    return n
-
-
-@njit(inline="always", **JIT)
-def _crowded(L, j0):
-    """Whether group j0 runs the contact stages on all its lanes (CROWD)."""
-    touching = 0.0
-    for j in range(j0, j0 + GROUP):
-        touching += L[LANE.on + j]
-    return touching >= CROWD
-
-
-@njit(inline="always", **JIT)
-def _group_contact(L, j0):
-    """The RK4 stages with the contact force of every lane of group j0, each lane in
-    contact taking them for its trial step (the same bits as in a packed block)."""
-    for j in range(j0, j0 + GROUP):
-        x, v, V, s0, c0 = _state(L, j)
-        A, ca, sa = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j]
-        sm = s0 * ca + c0 * sa
-        s1 = sm * ca + (c0 * ca - s0 * sa) * sa
-        on = L[LANE.on + j]
-        coef = Coefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j],
-                            on * L[LANE.khm + j], L[LANE.gap + j], L[LANE.ch + j],
-                            L[LANE.irc + j], L[LANE.thc + j])
-        xc, vc, Vc, _, _ = rk4(x, v, V, L[LANE.h + j], A * s0, A * sm, A * s1, coef)
-        L[LANE.x_contact + j], L[LANE.v_contact + j], L[LANE.voltage_contact + j] = xc, vc, Vc
-    # (chosen in a loop of its own: with the choice in the loop above, LLVM left that loop
-    # scalar)
-    for j in range(j0, j0 + GROUP):
-        free = L[LANE.on + j] == 0.0
-        L[LANE.x_trial + j] = L[LANE.x_trial + j] if free else L[LANE.x_contact + j]
-        L[LANE.v_trial + j] = L[LANE.v_trial + j] if free else L[LANE.v_contact + j]
-        L[LANE.voltage_trial + j] = (
-            L[LANE.voltage_trial + j] if free else L[LANE.voltage_contact + j])
-
-
-@njit(inline="always", **JIT)
-def _contact_block(L, b):
-    """One RK4 step with the contact force of the packed lanes b, ..., b + BLOCK - 1 (see
-    _contact_steps), the forcing at its middle and end by rotating the phase by half a
-    step; written out, as LLVM vectorizes only a loop without an inner loop."""
-    for k in range(b, b + BLOCK):
-        x, v, V, s0, c0 = (L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k],
-                           L[LANE.q_sin + k], L[LANE.q_cos + k])
-        A, ca, sa = L[LANE.q_amplitude + k], L[LANE.q_cos_half + k], L[LANE.q_sin_half + k]
-        sm = s0 * ca + c0 * sa
-        s1 = sm * ca + (c0 * ca - s0 * sa) * sa
-        coef = Coefficients(L[LANE.q_wn2 + k], L[LANE.q_cm + k], L[LANE.q_thm + k],
-                            L[LANE.q_khm + k], L[LANE.q_gap + k], L[LANE.q_ch + k],
-                            L[LANE.q_irc + k], L[LANE.q_thc + k])
-        x, v, V, _, _ = rk4(x, v, V, L[LANE.q_dt + k], A * s0, A * sm, A * s1, coef)
-        L[LANE.q_x + k], L[LANE.q_v + k], L[LANE.q_voltage + k] = x, v, V
 
 
 @njit(inline="always", **JIT)
@@ -500,15 +407,44 @@ def _half_phases(s0, c0, ca, sa):
 
 
 @njit(inline="always", **JIT)
-def _trial_steps(L, j0):
-    """The trial step of group j0's lanes by the contact-free map (see the rows
-    LANE.mxx...); _contact_steps replaces it for the lanes in contact."""
+def _trial_steps(L, j0, contact):
+    """The trial step of group j0's lanes: the contact-free map (see the rows LANE.mxx...),
+    and with ``contact`` the RK4 stages with the contact force for the lanes in contact,
+    chosen lane by lane (a lane out of contact gets the same bits either way)."""
     for j in range(j0, j0 + GROUP):
         x, v, V, s0, c0 = _state(L, j)
         xn = x + _increment(L, LANE.mxx + j, x, v, V, s0, c0)
         vn = v + _increment(L, LANE.mvx + j, x, v, V, s0, c0)
         Vn = V + _increment(L, LANE.mex + j, x, v, V, s0, c0)
         L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j] = xn, vn, Vn
+    if contact:
+        for j in range(j0, j0 + GROUP):
+            x, v, V, s0, c0 = _state(L, j)
+            A, ca, sa = L[LANE.amplitude + j], L[LANE.cos_half + j], L[LANE.sin_half + j]
+            sm = s0 * ca + c0 * sa
+            s1 = sm * ca + (c0 * ca - s0 * sa) * sa
+            on = L[LANE.on + j]
+            coef = Coefficients(
+                L[LANE.wn2 + j],
+                L[LANE.cm + j],
+                L[LANE.thm + j],
+                on * L[LANE.khm + j],
+                L[LANE.gap + j],
+                L[LANE.ch + j],
+                L[LANE.irc + j],
+                L[LANE.thc + j],
+            )
+            xc, vc, Vc, _, _ = rk4(x, v, V, L[LANE.h + j], A * s0, A * sm, A * s1, coef)
+            L[LANE.x_contact + j], L[LANE.v_contact + j], L[LANE.voltage_contact + j] = xc, vc, Vc
+        # (chosen in a loop of its own: with the choice in the loop above, LLVM left that
+        # loop scalar)
+        for j in range(j0, j0 + GROUP):
+            free = L[LANE.on + j] == 0.0
+            L[LANE.x_trial + j] = L[LANE.x_trial + j] if free else L[LANE.x_contact + j]
+            L[LANE.v_trial + j] = L[LANE.v_trial + j] if free else L[LANE.v_contact + j]
+            L[LANE.voltage_trial + j] = (
+                L[LANE.voltage_trial + j] if free else L[LANE.voltage_contact + j]
+            )
 
 
 @njit(inline="always", **JIT)

@@ -216,12 +216,10 @@ LANE = layout("LaneTable", (
     ("mxx", ""), ("mxv", ""), ("mxe", ""), ("mxs", ""), ("mxc", ""),
     ("mvx", ""), ("mvv", ""), ("mve", ""), ("mvs", ""), ("mvc", ""),
     ("mex", ""), ("mev", ""), ("mee", ""), ("mes", ""), ("mec", ""),
-    # ... and the lanes that take a step in contact or quarter steps, packed in turn
-    # (lanes._contact_steps, lanes.quarter_steps): their lane, state, forcing phase and
-    # parameters.
+    # ... and the lanes that take quarter steps, packed (lanes.quarter_steps): their
+    # lane, state, forcing phase and parameters.
     ("q_lane", ""), ("q_x", ""), ("q_v", ""), ("q_voltage", ""), ("q_sin", ""), ("q_cos", ""),
-    ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_cos_half", ""),
-    ("q_sin_half", ""), ("q_dt", ""),
+    ("q_amplitude", ""), ("q_cos_eighth", ""), ("q_sin_eighth", ""), ("q_dt", ""),
     ("q_wn2", ""), ("q_cm", ""), ("q_thm", ""), ("q_khm", ""), ("q_gap", ""), ("q_ch", ""),
     ("q_irc", ""), ("q_thc", ""),
     # ... and, out of the lane loop's way, rows read only at a period's start and end: the
@@ -259,10 +257,11 @@ LANE = layout("LaneTable", (
     ("tvx", ""), ("tvv", ""), ("tve", ""),
     ("tex", ""), ("tev", ""), ("tee", ""),
     # ... and the multi-step: clear of the stops a lane may take PARAM.multi steps an
-    # iteration, the composition of as many contact-free steps (lanes.resume), with the
-    # rows of SWAPPED for it; the rows of the mode not in use wait in the alt_ rows.
+    # iteration, the composition of as many contact-free steps (lanes.resume), with its
+    # own rows of those a step reads (lanes._MULTI_ROWS); the rows of the mode not in use
+    # wait in the alt_ rows.
     ("multi", "steps a multi-step takes; 1: the lane takes one step at a time"),
-    ("mode", "1: the lane takes multi-steps, its rows of SWAPPED those of a multi-step"),
+    ("mode", "1: the lane takes multi-steps, its rows of lanes._MULTI_ROWS a multi-step's"),
     ("multi_since", "iteration of the lane's first multi-step since it last took one step"),
     ("hold", "iteration up to which the lane takes single steps after a multi-step it "
              "took apart"),
