@@ -21,10 +21,11 @@ from .models import hertz
 from .parameters import TooStiffError, forcing_amplitude
 
 #: Contact-free steps a lane takes at once (layouts.PARAM.multi, lanes.resume): their
-#: composition, a map of the same cost as one step. Each multi-step a switch, an extremum
-#: or a period's end falls in is taken again one step at a time, so the gain is the share
-#: of a period clear of them [-].
+#: composition, a map of the same cost as one step, where a period holds 1024 steps or more
+#: (lanes.MULTI_SPAN). A multi-step that ends in contact or near the stop is taken again
+#: one step at a time, so the gain is the share of a period clear of the stops [-].
 MULTI = 4.0
+
 
 def pack_parameters(p: dict) -> np.ndarray:
     """The engine's parameter row (layouts.PARAM) of a validated parameter dict [SI]."""

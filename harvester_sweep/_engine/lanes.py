@@ -4,12 +4,11 @@ The plain RK4 step of every lane runs in branch-free loops over groups of GROUP 
 which LLVM compiles to vector code: out of contact the step is linear, and is applied as
 the matrix it is (tip_mass.free_step_map), or as the matrix of several such steps at once
 (a multi-step: :func:`resume`); a group with a lane in contact also runs the RK4 stages
-with the contact force. The rare steps that need more (a contact
-switch to locate, graded sub-steps next to a touch or a separation, an extremum or a force
-peak to place, the end of a forcing period) are marked and finished lane by lane in scalar
-code (:func:`finish_step`); the steps just after a touch and before a separation, in
-quarter steps, run first, in vector code on the lanes that take them, packed
-(quarter_steps).
+with the contact force. The rare steps that need more (a contact switch to locate, graded
+sub-steps next to a touch or a separation, an extremum or a force peak to place, the end
+of a forcing period) are marked and finished lane by lane in scalar code
+(:func:`finish_step`); the steps just after a touch and before a separation, in quarter
+steps, run first, in vector code on the lanes that take them, packed (quarter_steps).
 
 A point's result does not depend on its lane: every lane runs the same vector
 instructions, and which steps run scalar code is decided by the point's own state (see
@@ -351,12 +350,11 @@ def lane_steps(L, groups, it):
     A lane out of contact steps by the RK4 step's linear map (tip_mass.free_step_map, 15
     multiply-adds and 3 adds; a multi-step's in multi-step mode: resume); a group with a
     lane in contact also runs the RK4 stages with the contact force, and each lane takes
-    the one that applies to it, so that a point gets
-    the same bits whatever its neighbours. Two groups rather than one block of LANES,
-    because a block is more often in contact; not four groups of one vector, whose
-    contact-free loop LLVM compiled to scalar code once the trial step got short. A
-    second loop commits: lanes whose
-    step needs more (a contact switch, graded sub-steps near a touch or a separation, an
+    the one that applies to it, so that a point gets the same bits whatever its
+    neighbours. Two groups rather than one block of LANES, because a block is more often
+    in contact; not four groups of one vector, whose contact-free loop LLVM compiled to
+    scalar code once the trial step got short. A second loop commits: lanes whose step
+    needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in LANE.need and left
     for :func:`finish_step`. Returns the number of lanes with a point marked, and how
     many of them take quarter steps (see quarter_steps).
