@@ -41,6 +41,7 @@ from .layouts import (
     LANE,
     LANES,
     METRIC,
+    MULTI_ROWS,
     N_STROBE,
     N_VALUES,
     PARAM,
@@ -58,13 +59,10 @@ from .steady import MAX_ORBIT_PERIOD
 SYNC = 2048.0
 
 
-# The rows a lane's step reads that differ between one step and a multi-step: the
-# contact-free map, the forcing's rotation, the lengths int V^2 dt is taken over and
-# whether the turns of v and V mark the step (a multi-step always marks them: see resume).
-_MULTI_ROWS = tuple((getattr(LANE, name), getattr(LANE, "alt_" + name)) for name in (
-    "mxx", "mxv", "mxe", "mxs", "mxc", "mvx", "mvv", "mve", "mvs", "mvc",
-    "mex", "mev", "mee", "mes", "mec", "cos_step", "sin_step", "half_h", "h2_6",
-    "turn_floor"))
+# The rows of layouts.MULTI_ROWS and their alt_ rows, swapped when a lane changes mode (a
+# multi-step always marks the turns of v and V: see resume).
+_MULTI_ROWS = tuple((getattr(LANE, name), getattr(LANE, "alt_" + name))
+                    for name in MULTI_ROWS)
 
 
 # Multi-steps a period at least [-]: int V^2 dt is booked on the cubic Hermite
@@ -666,13 +664,14 @@ def finish_step(L, j, it):
                 return False
             # its last multi-step before the lane's stop: single steps from here
             _leave_multi(L, j, it + 1.0)
-            k, n_steps = it + 1.0 - L[LANE.k0 + j], L[LANE.steps + j]
-            sync = SYNC * math.floor(k / SYNC)
-            if k == sync or k >= n_steps:  # (at the stop: a resync or the period's end)
+            k = it + 1.0 - L[LANE.k0 + j]
+            if k == _next_stop(L, j, k) or k >= L[LANE.steps + j]:  # (at a resync or the end)
                 return _next_phase(L, j, it, s0, c0)
-            L[LANE.k_end + j] = L[LANE.k0 + j] + min(sync + SYNC, n_steps) - 1.0
             return False
         _take_apart(L, j, it)
+    if L[LANE.multi + j] <= 1.0:
+        _finish_rigid(L, j, it)
+        return _next_phase(L, j, it, s0, c0)
     # (an extremum inside the step, or the lane mirrored: what a multi-step was taken
     # apart for, likely)
     v, dV, sign = L[LANE.v + j], _voltage_rate_of(L, j), L[LANE.sign + j]
@@ -681,7 +680,7 @@ def finish_step(L, j, it):
               or dV * _voltage_rate_of(L, j) * sign * L[LANE.sign + j] <= 0.0
               or sign != L[LANE.sign + j])
     ended = _next_phase(L, j, it, s0, c0)
-    if not ended and L[LANE.multi + j] > 1.0:
+    if not ended:
         if it >= L[LANE.hold + j] or turned:
             resume(L, j, it + 1.0)
         elif L[LANE.on + j] == 0.0:  # (come back once past what it was taken apart for)
@@ -909,17 +908,24 @@ def _next_phase(L, j, it, s0, c0):
     # The forcing phase of the next step: rotated as in the lane loop, and reset exactly
     # every SYNC steps (the rotation's rounding drifts); at k = n_steps the period ends
     # and _start_period sets it to the start's.
-    sync = SYNC * math.floor(k / SYNC)
+    sync = _next_stop(L, j, k)
     if k == sync and k < n_steps:
         phase = 2.0 * math.pi * k / n_steps + L[LANE.phase + j]
         L[LANE.sin + j], L[LANE.cos + j] = math.sin(phase), math.cos(phase)
     else:
         cb, sb = L[LANE.cos_step + j], L[LANE.sin_step + j]
         L[LANE.sin + j], L[LANE.cos + j] = s0 * cb + c0 * sb, c0 * cb - s0 * sb
-    # the next step to stop at: a resync or the end (a lane in quarter steps is marked as
-    # such by _commit_steps)
-    L[LANE.k_end + j] = k0 + min(sync + SYNC, n_steps) - 1.0
     return k >= n_steps
+
+
+@njit(inline="always", **JIT)
+def _next_stop(L, j, k):
+    """Set lane ``j``'s LANE.k_end, ``k`` steps into its period, to the iteration of its
+    next step to stop at: a resync or the end (a lane in quarter steps is marked as such by
+    _commit_steps); returns the last resync at or before k [steps]."""
+    sync = SYNC * math.floor(k / SYNC)
+    L[LANE.k_end + j] = L[LANE.k0 + j] + min(sync + SYNC, L[LANE.steps + j]) - 1.0
+    return sync
 
 
 @njit(**JIT)

@@ -143,6 +143,13 @@ ACC = layout("Accumulators", (
     ("vimp_min", "smallest approach velocity at first touch of a stop [m/s]"),
 ))
 
+#: The lane table's rows a step reads that differ between one step and a multi-step
+#: (lanes.resume): the contact-free map, the forcing's rotation, the lengths int V^2 dt is
+#: taken over and whether the turns of v and V mark the step; each has an alt_ row.
+MULTI_ROWS = ("mxx", "mxv", "mxe", "mxs", "mxc", "mvx", "mvv", "mve", "mvs", "mvc",
+              "mex", "mev", "mee", "mes", "mec", "cos_step", "sin_step", "half_h", "h2_6",
+              "turn_floor")
+
 #: Points stepped together by one thread, and lanes that take the contact-free code together
 #: (lanes.lane_steps writes out 2 groups).
 LANES = 16
@@ -258,14 +265,11 @@ LANE = layout("LaneTable", (
     ("tex", ""), ("tev", ""), ("tee", ""),
     # ... and the multi-step: clear of the stops a lane may take PARAM.multi steps an
     # iteration, the composition of as many contact-free steps (lanes.resume), with its
-    # own rows of those a step reads (lanes._MULTI_ROWS); the rows of the mode not in use
-    # wait in the alt_ rows.
+    # own rows of those a step reads (MULTI_ROWS); the rows of the mode not in use wait
+    # in the alt_ rows.
     ("multi", "steps a multi-step takes; 1: the lane takes one step at a time"),
-    ("mode", "1: the lane takes multi-steps, its rows of lanes._MULTI_ROWS a multi-step's"),
+    ("mode", "1: the lane takes multi-steps, its rows of MULTI_ROWS a multi-step's"),
     ("multi_since", "iteration of the lane's first multi-step since it last took one step"),
     ("hold", "iteration up to which the lane takes single steps after a multi-step it "
              "took apart"),
-) + tuple(("alt_" + name, "") for name in (
-    "mxx", "mxv", "mxe", "mxs", "mxc", "mvx", "mvv", "mve", "mvs", "mvc",
-    "mex", "mev", "mee", "mes", "mec", "cos_step", "sin_step", "half_h", "h2_6",
-    "turn_floor")), stride=LANES)
+) + tuple(("alt_" + name, "") for name in MULTI_ROWS), stride=LANES)
