@@ -91,19 +91,25 @@ def _load_multi(L, j, m, r, n_steps, h):
     """The alt_ rows of lane ``j``: a multi-step of ``r`` contact-free steps, whose
     increment (3 x 5, as m's: tip_mass.free_step_map) is found by taking the r steps from
     each basis vector of (x, v, V, sin, cos), the forcing rotated a step at a time as the
-    lane loop rotates it; its increments are summed, not I + D formed (see free_step_map)."""
+    lane loop rotates it; its increments are summed, not I + D formed (see free_step_map).
+    (In scalars: ``m @ z`` on arrays this small costs a BLAS call each, and this runs at
+    every load of a point, which for the orbit solver's one-period runs is as often as a
+    period.)"""
     cb, sb = L[LANE.cos_step + j], L[LANE.sin_step + j]
     for i in range(5):
-        z = np.zeros(5)
-        z[i] = 1.0
-        total = np.zeros(3)
+        z0, z1, z2 = 1.0 if i == 0 else 0.0, 1.0 if i == 1 else 0.0, 1.0 if i == 2 else 0.0
+        z3, z4 = 1.0 if i == 3 else 0.0, 1.0 if i == 4 else 0.0
+        t0, t1, t2 = 0.0, 0.0, 0.0
         for _ in range(int(r)):
-            inc = m @ z
-            z[:3] += inc
-            total += inc
-            z[3], z[4] = z[3] * cb + z[4] * sb, z[4] * cb - z[3] * sb
-        for c, row in enumerate((LANE.alt_mxx, LANE.alt_mvx, LANE.alt_mex)):
-            L[row + i * LANES + j] = total[c]
+            d0 = m[0, 0] * z0 + m[0, 1] * z1 + m[0, 2] * z2 + m[0, 3] * z3 + m[0, 4] * z4
+            d1 = m[1, 0] * z0 + m[1, 1] * z1 + m[1, 2] * z2 + m[1, 3] * z3 + m[1, 4] * z4
+            d2 = m[2, 0] * z0 + m[2, 1] * z1 + m[2, 2] * z2 + m[2, 3] * z3 + m[2, 4] * z4
+            z0, z1, z2 = z0 + d0, z1 + d1, z2 + d2
+            t0, t1, t2 = t0 + d0, t1 + d1, t2 + d2
+            z3, z4 = z3 * cb + z4 * sb, z4 * cb - z3 * sb
+        L[LANE.alt_mxx + i * LANES + j] = t0
+        L[LANE.alt_mvx + i * LANES + j] = t1
+        L[LANE.alt_mex + i * LANES + j] = t2
     L[LANE.alt_cos_step + j] = math.cos(2.0 * math.pi * r / n_steps)
     L[LANE.alt_sin_step + j] = math.sin(2.0 * math.pi * r / n_steps)
     L[LANE.alt_half_h + j], L[LANE.alt_h2_6 + j] = 0.5 * r * h, (r * h) ** 2 / 6.0
