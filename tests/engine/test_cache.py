@@ -26,9 +26,10 @@ def twice_plus_one(x):
     return 2 * x + 1
 """
 
-# Both processes read the index before either writes it: each, once it has read it, waits
-# until the other has arrived at its save and read it too; under a lock the other cannot
-# read it, and this save goes on after BLOCKED s.
+# Both processes read the index before either writes it: each waits at its save until the
+# other has arrived at its own (both past the cache lookup of their first call, which the
+# lock also guards), then, once it has read the index, until the other has read it too;
+# under a lock the other cannot read it, and this save goes on after BLOCKED s.
 SAVE = """
 import os, sys, time
 from numba.core import caching
@@ -48,13 +49,13 @@ def wait_for(name, seconds):
 def save_overload(self, sig, data):
     if self._py_func.__module__ == "racing":
         open(os.path.join(flags, "arrived " + me), "w").close()
+        wait_for("arrived " + other, 60.0)
     _save_overload(self, sig, data)
 
 
 def save_index(self, overloads):
     if self._index_name.startswith("racing."):  # (not the package's, flushed at import)
         open(os.path.join(flags, "read " + me), "w").close()
-        wait_for("arrived " + other, 60.0)
         wait_for("read " + other, BLOCKED)
     _save_index(self, overloads)
 
