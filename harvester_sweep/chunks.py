@@ -26,7 +26,8 @@ def chunk_points(spec, chunk: int) -> int:
     return len(spec.chunk_lines(chunk)) * spec.line_length
 
 
-def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) -> dict:
+def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None,
+                  prepared: dict | None = None) -> dict:
     """Run the lines of one chunk.
 
     Parameters
@@ -39,6 +40,9 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
     on_points : callable, optional
         Called with the number of points newly finished, as they finish (about every
         0.2 s); what it raises stops the chunk and is raised again.
+    prepared : dict, optional
+        ``prepare_chunk(spec, chunk)``, made beforehand (the sweep makes the next chunk's
+        while this one runs); made here when not given.
 
     Returns
     -------
@@ -58,6 +62,35 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
         return beam_chunk(spec, chunk, None if on_points is None
                           else lambda done, total, what: on_points(chunk_points(spec, chunk)
                                                                    // length))
+    if prepared is None:
+        prepared = prepare_chunk(spec, chunk)
+    reverse = prepared["reverse"]
+    n, length = len(reverse), spec.line_length
+    results = solve(prepared["packed"], prepared["successors"], prepared["estimated"],
+                    spec.samples, on_points)
+
+    def arranged(values):  # on the grid: down lines ran from the highest frequency
+        values = values.reshape((n, length) + values.shape[1:])
+        values[reverse] = values[reverse, ::-1]
+        return np.ascontiguousarray(values)
+
+    columns = [metric_index(name) for name in spec.metrics]
+    strobe = results.strobes[..., list(STROBES.values())]
+    run = {name: arranged(values) for name, values in results.run_outputs().items()}
+    return {"metrics": arranged(results.metrics[:, columns]),
+            "strobe": arranged(strobe),
+            "error_estimate": arranged(results.errors),
+            **run,
+            "run_time": np.float64(results.run_time)}
+
+
+def prepare_chunk(spec, chunk: int) -> dict:
+    """What the engine needs to run the lines of chunk ``chunk`` of a tip-mass sweep
+    ``spec``: its points resolved and packed (``packed``, line-major, each line in the
+    order it runs), each point's successor on its line (``successors``, -1 at a line's
+    end), which points take an error estimate (``estimated``), and which lines run down
+    in frequency (``reverse``). Python only, no engine call: a sweep makes the next
+    chunk's while the engine runs this one."""
     lines = spec.chunk_lines(chunk)
     n, length = len(lines), spec.line_length
     # Line-major, each line in the order it runs (a down line from its highest frequency):
@@ -78,27 +111,13 @@ def compute_chunk(spec, chunk: int, threads: int | None = None, on_points=None) 
                 values["frequency"] = frequencies[length - 1 - step if reverse[i] else step]
             points.append(spec.point_parameters(values))
     # Each from rest: a line's first point, and a point after one that diverged.
-    packed = pack_points(points)
     successors = np.arange(1, n * length + 1).reshape(n, length)
     successors[:, -1] = -1
     position = np.where(reverse[:, None], length - 1 - np.arange(length)[None, :],
                         np.arange(length)[None, :])
     estimated = spec.estimated(np.asarray(lines)[:, None] * length + position)
-    results = solve(packed, successors.ravel(), estimated.ravel(), spec.samples, on_points)
-
-    def arranged(values):  # on the grid: down lines ran from the highest frequency
-        values = values.reshape((n, length) + values.shape[1:])
-        values[reverse] = values[reverse, ::-1]
-        return np.ascontiguousarray(values)
-
-    columns = [metric_index(name) for name in spec.metrics]
-    strobe = results.strobes[..., list(STROBES.values())]
-    run = {name: arranged(values) for name, values in results.run_outputs().items()}
-    return {"metrics": arranged(results.metrics[:, columns]),
-            "strobe": arranged(strobe),
-            "error_estimate": arranged(results.errors),
-            **run,
-            "run_time": np.float64(results.run_time)}
+    return {"packed": pack_points(points), "successors": successors.ravel(),
+            "estimated": estimated.ravel(), "reverse": reverse}
 
 
 def beam_chunk(spec, chunk: int, progress=None) -> dict:

@@ -436,11 +436,15 @@ def _counts(T):
     return left, running
 
 
-@njit(**SOLVER_JIT)
+@njit(nogil=True, **SOLVER_JIT)
 def _rounds(T, threads, one):
     """Run rounds on at most ``threads`` threads until every point is done, or one round
     if ``one``: (points done in them, points not done yet; -1 where points wait that no
-    run will release)."""
+    run will release).
+
+    It runs without the GIL, so that a sweep sets up its next chunk in a Python thread
+    meanwhile (sweep.run_sweep): the cores the rounds leave idle (a round's slowest thread,
+    the algebra between rounds) do that work."""
     done = 0
     while True:
         left, running = _counts(T)

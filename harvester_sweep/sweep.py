@@ -1,7 +1,8 @@
 """The sweep driver: a grid of parameter points run to steady state, into one xarray Dataset.
 
 Work is split into lines and chunks (:mod:`harvester_sweep.chunks`): a chunk is a run of
-whole lines, which go through one call of the engine; numba's threads share them. With an
+whole lines, which go through one call of the engine; numba's threads share them, while a
+thread of low priority sets up the next chunk (:func:`_run_here`). With an
 output file, each finished chunk is saved in ``OUT.nc.partial/`` at once
 (:mod:`harvester_sweep.chunk_store`), sealed with its checksum; a resumed run computes only
 the chunks missing or damaged. The netCDF file is written aside and renamed when complete.
@@ -9,13 +10,17 @@ the chunks missing or damaged. The netCDF file is written aside and renamed when
 
 from __future__ import annotations
 
+import contextlib
 import numbers
+import os
 import sys
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 from tqdm import tqdm
 
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
-from .chunks import chunk_points, compute_chunk
+from .chunks import chunk_points, compute_chunk, prepare_chunk
 from .parameters import ParameterError, is_number, value_text
 from .run_estimate import announce, sweep_estimate
 from .sweep_file import load_sweep
@@ -100,8 +105,7 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
 
             def compute(chunks):
                 if workers is None and scheduler is None:
-                    for chunk in chunks:
-                        store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update))
+                    _run_here(spec, chunks, store, bar)
                 else:
                     from .cluster import run_on_dask
 
@@ -116,6 +120,48 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         if output is not None:
             write_result(store, ds, output)
     return ds
+
+
+#: The GIL's switch interval while a sweep sets up its next chunk in a Python thread [s]
+#: (Python's default is 5 ms): between the orbit solver's rounds the calling thread takes
+#: the GIL back to tell progress, and waits this long at most for the set-up to let go.
+GIL_HANDOFF = 1e-4
+
+
+def _run_here(spec, chunks, store, bar) -> None:
+    """Run ``chunks`` in this process one after another, each saved as it finishes, while
+    a Python thread sets up the next one (chunks.prepare_chunk: its points resolved and
+    packed, serial Python that would otherwise leave a core idle between engine calls;
+    the orbit solver's rounds release the GIL)."""
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(GIL_HANDOFF)
+    try:
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="chunk-set-up",
+                                initializer=_behind_the_engine) as pool:
+            prepared = prepare_chunk(spec, chunks[0]) if chunks else None
+            for k, chunk in enumerate(chunks):
+                ahead = (pool.submit(prepare_chunk, spec, chunks[k + 1])
+                         if k + 1 < len(chunks) else None)
+                try:
+                    store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update,
+                                                    prepared=prepared))
+                except BaseException:
+                    if ahead is not None:
+                        ahead.cancel()  # (or, if begun, waited for: a second at most)
+                    raise
+                if ahead is not None:
+                    prepared = ahead.result()
+    finally:
+        sys.setswitchinterval(interval)
+
+
+def _behind_the_engine() -> None:
+    """Give the calling thread the lowest priority (Linux, where nice is per thread): the
+    set-up it does then takes the cores the engine's threads leave idle, not theirs
+    (every parallel round waits for its slowest thread). Elsewhere it runs beside them."""
+    if sys.platform == "linux":
+        with contextlib.suppress(OSError):
+            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 19)
 
 
 def _threads(workers: int | None, scheduler: str | None) -> int:

@@ -218,6 +218,32 @@ def test_a_full_disk_while_saving_a_chunk_keeps_the_others(tmp_path, capsys, mon
         assert_same_bits(resumed, whole)
 
 
+def test_a_fault_setting_up_the_next_chunk_keeps_the_finished_ones(tmp_path, monkeypatch,
+                                                                   whole):
+    """The next chunk is set up in a thread while one runs (sweep._run_here): what goes
+    wrong there reaches the caller once the running chunk is saved, and the GIL's switch
+    interval, shortened meanwhile, is Python's again."""
+    out, interval = tmp_path / "fr.nc", sys.getswitchinterval()
+    prepare = sweep.prepare_chunk
+
+    def fails_at_chunk_2(spec_, chunk):
+        if chunk == 2:
+            raise Interrupted
+        return prepare(spec_, chunk)
+
+    monkeypatch.setattr(sweep, "prepare_chunk", fails_at_chunk_2)
+    with pytest.raises(Interrupted):
+        run_sweep(SWEEP, out, progress=False)
+    monkeypatch.undo()
+    assert sys.getswitchinterval() == interval
+    saved = sorted(path.name for path in (tmp_path / "fr.nc.partial").glob("chunk_*.npz"))
+    assert saved == ["chunk_000000.npz", "chunk_000001.npz"]
+    computed = _counting(monkeypatch)
+    resumed = run_sweep(SWEEP, out, resume=True, progress=False)
+    assert computed == [2, 3]
+    assert_same_bits(resumed, whole)
+
+
 def test_an_output_folder_that_cannot_be_written_is_one_line(tmp_path, capsys, monkeypatch):
     toml = tmp_path / "fr.toml"
     toml.write_text(TOML)
