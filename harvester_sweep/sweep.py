@@ -2,7 +2,7 @@
 
 Work is split into lines and chunks (:mod:`harvester_sweep.chunks`): a chunk is a run of
 whole lines, which go through one call of the engine; numba's threads share them, while a
-thread of low priority sets up the next chunk (:func:`_run_here`). With an
+Python thread sets up the next chunk (:func:`_run_here`). With an
 output file, each finished chunk is saved in ``OUT.nc.partial/`` at once
 (:mod:`harvester_sweep.chunk_store`), sealed with its checksum; a resumed run computes only
 the chunks missing or damaged. The netCDF file is written aside and renamed when complete.
@@ -10,11 +10,8 @@ the chunks missing or damaged. The netCDF file is written aside and renamed when
 
 from __future__ import annotations
 
-import contextlib
 import numbers
-import os
 import sys
-import threading
 from concurrent.futures import ThreadPoolExecutor
 
 from tqdm import tqdm
@@ -136,8 +133,7 @@ def _run_here(spec, chunks, store, bar) -> None:
     interval = sys.getswitchinterval()
     sys.setswitchinterval(GIL_HANDOFF)
     try:
-        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="chunk-set-up",
-                                initializer=_behind_the_engine) as pool:
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="chunk-set-up") as pool:
             prepared = prepare_chunk(spec, chunks[0]) if chunks else None
             for k, chunk in enumerate(chunks):
                 ahead = (pool.submit(prepare_chunk, spec, chunks[k + 1])
@@ -153,15 +149,6 @@ def _run_here(spec, chunks, store, bar) -> None:
                     prepared = ahead.result()
     finally:
         sys.setswitchinterval(interval)
-
-
-def _behind_the_engine() -> None:
-    """Give the calling thread the lowest priority (Linux, where nice is per thread): the
-    set-up it does then takes the cores the engine's threads leave idle, not theirs
-    (every parallel round waits for its slowest thread). Elsewhere it runs beside them."""
-    if sys.platform == "linux":
-        with contextlib.suppress(OSError):
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 19)
 
 
 def _threads(workers: int | None, scheduler: str | None) -> int:
