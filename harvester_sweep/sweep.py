@@ -138,13 +138,10 @@ def _run_here(spec, chunks, store, bar) -> None:
             for k, chunk in enumerate(chunks):
                 ahead = (pool.submit(prepare_chunk, spec, chunks[k + 1])
                          if k + 1 < len(chunks) else None)
-                try:
-                    store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update,
-                                                    prepared=prepared))
-                except BaseException:
-                    if ahead is not None:
-                        ahead.cancel()  # (or, if begun, waited for: a second at most)
-                    raise
+                # (what this raises leaves through the pool, which first waits for the
+                # set-up under way: under a second)
+                store.save(chunk, compute_chunk(spec, chunk, on_points=bar.update,
+                                                prepared=prepared))
                 if ahead is not None:
                     prepared = ahead.result()
     finally:
