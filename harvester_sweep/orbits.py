@@ -61,6 +61,7 @@ count or the chunking.
 from __future__ import annotations
 
 import sys
+import threading
 from collections import namedtuple
 from dataclasses import dataclass
 
@@ -70,6 +71,7 @@ import numpy as np
 from . import acceptance, accuracy, dense, period_map
 from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, NO_STOP, PARAM, STATE, STATUS, cache
 from ._engine.layouts import layout
+from ._engine.scheduler import run_watched
 from .acceptance import (
     NEAR,
     closing_period,
@@ -235,6 +237,12 @@ _Points = namedtuple("_Points", (
     "work",  # RK4 steps taken (n, len(WORK)), by kind
     "calls",  # rounds run (1,)
 ))
+#: A solve's groups of lines, each solved in a thread of its own (_solve): one row each.
+_TEAM = layout("TeamRow", (
+    ("threads", "threads of the group's engine calls"),
+    ("done", "points of the group done"),
+    ("stop", "nonzero: run no more rounds"),
+))
 
 
 @dataclass
@@ -302,16 +310,17 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     samples : int
         Stroboscopic samples returned per point.
     on_points : callable, optional
-        Called with the number of points newly finished after each round of runs; what it
-        raises (KeyboardInterrupt included) stops the solve and is raised again.
+        Called with the number of points newly finished, as they finish (about every
+        0.2 s); what it raises (KeyboardInterrupt included) stops the solve after the
+        rounds running then, and is raised again.
     settling : float
         An attempt's iterates end once within this of an orbit they cannot take, relative
         to the scales [-] (default SETTLING); below 0 they never do and every attempt
         converges, which the tests compare against. A value at run time, not a constant
         compiled in, so that changing it compiles nothing.
 
-    The rounds run in compiled code: all of them in one call without ``on_points``, else
-    one a call, so that progress is told and an interrupt seen between rounds.
+    The rounds run in compiled code, the lines in groups each solved in a thread of its
+    own (_solve).
     """
     rows = np.ascontiguousarray(rows, dtype=float)
     states = np.ascontiguousarray(states, dtype=float)
@@ -333,13 +342,91 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     extent = (period_map.contact_free_extent(rows, states, GUESS_STEPS) if guessed
               else np.zeros((n, 2)))
     _set_up(pts, _linear_amplitude(rows), guessed, extent, np.flatnonzero(heads))
-    while True:
-        done, left = _rounds(pts, threads, on_points is not None)
-        assert left >= 0, "no point to run"
-        if on_points is not None and done:
-            on_points(done)
-        if left == 0:
-            return _result(pts, samples)
+    _solve(pts, threads, on_points)
+    return _result(pts, samples)
+
+
+def _solve(pts: _Points, threads: int, on_points) -> None:
+    """Run the rounds of ``pts`` until every point is done, on ``threads`` threads.
+
+    The lines (a point, or a continuation's points) are dealt out to groups, one for each
+    thread while lines last, and each group is solved in a thread of its own, its engine
+    calls on one thread: a round of a solve waits for its slowest point, and a round of
+    few points (a continuation's, a line's points coming one after the other) is mostly
+    short calls and the algebra between them, on one core. The last group left runs on
+    every thread. A point's result does not depend on its group.
+    """
+    groups = _groups(pts.counts[:, _COUNT.successors], threads)
+    team = np.zeros((len(groups), len(_TEAM)), dtype=np.int64)
+    team[:, _TEAM.threads] = threads if len(groups) == 1 else 1
+    if len(groups) == 1 and on_points is None:
+        _ran(_rounds(pts, team, 0))
+        return
+    parts = [pts] if len(groups) == 1 else [_part(pts, group) for group in groups]
+    lock, running = threading.Lock(), [len(groups)]
+
+    def solve(g):
+        numba.set_num_threads(threads)  # (numba's thread count is per calling thread)
+        _ran(_rounds(parts[g], team, g))
+        with lock:
+            running[0] -= 1
+            if running[0] == 1:
+                # (no group runs a round now but the last: numba's workqueue threading
+                # layer takes one parallel call at a time)
+                team[:, _TEAM.threads] = threads
+
+    def stop():
+        team[:, _TEAM.stop] = 1
+
+    run_watched([lambda g=g: solve(g) for g in range(len(groups))],
+                lambda: int(team[:, _TEAM.done].sum()), stop, on_points)
+    if len(groups) > 1:
+        successors = pts.counts[:, _COUNT.successors].copy()
+        for group, part in zip(groups, parts):
+            for whole, piece in zip(pts, part):
+                if whole is not pts.calls:
+                    whole[group] = piece
+        pts.counts[:, _COUNT.successors] = successors
+        pts.calls[0] = max(part.calls[0] for part in parts)
+
+
+def _ran(outcome: int) -> None:
+    """Check what _rounds returned (it is stopped only by a failure, raised elsewhere)."""
+    if outcome < 0:
+        raise RuntimeError("the orbit solver has points waiting that no run releases")
+
+
+def _groups(successors, threads: int) -> list:
+    """The points (indices) of each group of lines that ``successors`` (see solve_orbits)
+    make: the lines dealt out in turn to min(threads, lines) groups, so that each group
+    gets its share of every part of a grid (neighbouring points cost alike)."""
+    n = len(successors)
+    linked = successors[successors >= 0]
+    heads = np.setdiff1d(np.arange(n), linked)
+    count = min(threads, len(heads))
+    if count <= 1:
+        return [np.arange(n)]
+    group = np.empty(n, dtype=np.int64)
+    group[heads] = np.arange(len(heads)) % count
+    ahead = heads
+    while ahead.size:  # one point further along every line a pass
+        following = successors[ahead]
+        ahead, following = ahead[following >= 0], following[following >= 0]
+        group[following] = group[ahead]
+        ahead = following
+    return [np.flatnonzero(group == g) for g in range(count)]
+
+
+def _part(pts: _Points, points) -> _Points:
+    """The table of ``points`` (indices, whole lines) of ``pts``, its successors counted
+    within it, none of its rounds run."""
+    part = _Points(*(np.zeros(1, dtype=np.int64) if whole is pts.calls else whole[points]
+                     for whole in pts))
+    where = np.full(len(pts.rows), -1, dtype=np.int64)
+    where[points] = np.arange(len(points))
+    successors = part.counts[:, _COUNT.successors]
+    successors[:] = np.where(successors >= 0, where[np.maximum(successors, 0)], -1)
+    return part
 
 
 def _points(rows, states, successors, estimated, accuracy, max_steps, settling) -> _Points:
@@ -437,28 +524,27 @@ def _counts(T):
 
 
 @njit(nogil=True, **SOLVER_JIT)
-def _rounds(T, threads, one):
-    """Run rounds on at most ``threads`` threads until every point is done, or one round
-    if ``one``: (points done in them, points not done yet; -1 where points wait that no
-    run will release).
+def _rounds(T, team, g):
+    """Run the rounds of group ``g`` of a solve (table ``T``; its row of ``team``, _TEAM)
+    until every point is done or the row's ``stop`` is set, each on the row's ``threads``
+    threads as it is then, counting the points done in its ``done``: 0 when every point
+    is done, 1 when stopped first, -1 where points wait that no run will release.
 
-    It runs without the GIL, so that a sweep sets up its next chunk in a Python thread
-    meanwhile (sweep.run_sweep): the cores the rounds leave idle (a round's slowest thread,
-    the algebra between rounds) do that work."""
-    done = 0
+    It runs without the GIL: the groups of a solve run at once (_solve), and a sweep sets
+    up its next chunk in a Python thread meanwhile (sweep._run_here)."""
     while True:
         left, running = _counts(T)
         if left == 0:
-            return done, 0
+            return 0
         if running == 0:
-            return done, -1
-        done += _round(T, threads)
+            return -1
+        if team[g, _TEAM.stop] != 0:
+            return 1
+        team[g, _TEAM.done] += _round(T, team[g, _TEAM.threads])
         T.calls[0] += 1
         for i in range(T.counts.shape[0]):
             if T.counts[i, _COUNT.phase] == _DONE and T.counts[i, _COUNT.rounds] == 0:
                 T.counts[i, _COUNT.rounds] = T.calls[0]
-        if one:
-            return done, _counts(T)[0]
 
 
 @njit(inline="always", **SOLVER_JIT)
@@ -1132,7 +1218,9 @@ def compile_solver() -> None:
     pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
                   np.zeros(0, bool), np.zeros(0), np.zeros(0), SETTLING)
     _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
-    _rounds(pts, 1, False)  # (and the _round it calls)
+    team = np.zeros((1, len(_TEAM)), dtype=np.int64)
+    team[0, _TEAM.threads] = 1
+    _rounds(pts, team, 0)  # (and the _round it calls)
 
 
 def solver_ready() -> bool:

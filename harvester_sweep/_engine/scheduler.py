@@ -216,30 +216,56 @@ def run_points(params, states, metrics, strobes, successors=None, on_points=None
     if on_points is None:
         _run_threads(*args)
         return
-    failure = []
 
     def run():
+        numba.set_num_threads(threads)  # (numba's thread count is per calling thread)
+        _run_threads(*args)
+
+    def stop():
+        control[-1] = 1  # (a no-op once the kernel is done; else it stops taking points)
+
+    run_watched([run], lambda: int(control[:threads].sum()), stop, on_points)
+
+
+def run_watched(tasks, done, stop, on_points=None) -> None:
+    """Run each of ``tasks`` (callables that call compiled code without the GIL) in a
+    thread of its own and wait for them all, in a way an interrupt reaches.
+
+    ``on_points(n)``, when given, is called in this thread as ``done()`` (points done so
+    far) grows, every _POLL seconds and once at the end; ``stop()`` asks the tasks to take
+    no more work: it is called when a task fails, when ``on_points`` raises or at a
+    KeyboardInterrupt, and on the way out (a no-op by then). What a task or ``on_points``
+    raises is raised again here, once every task has returned.
+    """
+    failure = []
+
+    def run(task):
         try:
-            numba.set_num_threads(threads)  # (numba's thread count is per calling thread)
-            _run_threads(*args)
+            task()
         except BaseException as error:  # raised again in the calling thread
             failure.append(error)
+            stop()
 
-    worker = threading.Thread(target=run, name="harvester_sweep kernel", daemon=True)
-    worker.start()
+    workers = [threading.Thread(target=run, args=(task,), name="harvester_sweep kernel",
+                                daemon=True) for task in tasks]
+    for worker in workers:
+        worker.start()
     reported = 0
     try:
-        running = True
-        while running:  # (at least once: a kernel may end before it is first looked at)
-            worker.join(_POLL)
-            running = worker.is_alive()
-            done = int(control[:threads].sum())
-            if done > reported:
-                on_points(done - reported)
-                reported = done
+        while True:  # (at least one look: a task may end before it is first looked at)
+            alive = [worker for worker in workers if worker.is_alive()]
+            if alive:
+                alive[0].join(_POLL)
+            now = done()
+            if on_points is not None and now > reported:
+                on_points(now - reported)
+                reported = now
+            if not alive:
+                break
     finally:
-        control[-1] = 1  # a no-op once the kernel is done; else it stops taking points
-        worker.join()
+        stop()
+        for worker in workers:
+            worker.join()
     if failure:
         raise failure[0]
 
@@ -308,9 +334,18 @@ def run_independent(params, states, metrics, strobes, settle, most, derivatives)
     parallel loop reached from compiled code does not start them, and crashes."""
     n = params.shape[0]
     heads = _taking_order(params, np.arange(n))
-    control = np.zeros(_threads(params, n, most) + 2, dtype=np.int64)
-    _run_threads(params, states, metrics, strobes, np.full(n, -1, dtype=np.int64), heads,
-                 control, settle, derivatives)
+    threads = _threads(params, n, most)
+    control = np.zeros(threads + 2, dtype=np.int64)
+    successors = np.full(n, -1, dtype=np.int64)
+    if threads == 1:
+        # (no parallel region: the orbit solver's groups of points each call from a thread
+        # of their own at once, and numba's workqueue threading layer, the one it falls
+        # back to, takes one parallel call at a time)
+        _run_queue(params, states, metrics, strobes, np.empty((0, len(SERIES))), settle,
+                   heads, successors, control, np.int64(0), derivatives)
+    else:
+        _run_threads(params, states, metrics, strobes, successors, heads, control, settle,
+                     derivatives)
 
 
 def _line_heads(successors: np.ndarray, n: int) -> np.ndarray:

@@ -5,6 +5,7 @@ automatic step used to miss."""
 
 import math
 
+import numba
 import numpy as np
 import pytest
 
@@ -246,6 +247,47 @@ def _grid(direction=None, n=24):
         successors[:, -1] = -1
         successors = successors.ravel()
     return packing.pack_points(points), successors
+
+
+def test_groups_of_lines_change_no_bits_and_report_every_point():
+    """A solve deals its lines out to groups, one a thread, each solved in a thread of its
+    own: lines of different lengths (frequency continuations up and down, points alone)
+    give the same bits on one thread and two, with progress told or not; the progress
+    told adds up to the points; an error told by the progress stops the solve."""
+    packed, successors = _grid("up", n=6)
+    down, down_successors = _grid("down", n=6)
+    alone = packing.pack_points([resolve_parameters("paper", gap=g, frequency=f,
+                                                    steps_per_period=512)
+                                 for g, f in ((0.4e-6, 160.0), (1e-6, 240.0), (3e-6, 200.0))])
+    cut = down_successors.copy()
+    cut[5], cut[[8, 20]] = 6, -1  # lines of 3, 6 and 9 points
+    rows = np.concatenate([packed.rows, down.rows, alone.rows])
+    states = np.concatenate([packed.states, down.states, alone.states])
+    successors = np.concatenate([successors, np.where(cut >= 0, cut + 36, -1), [-1] * 3])
+    estimated = np.arange(len(rows)) % 3 == 0
+    default = numba.get_num_threads()
+    runs, reports = [], []
+    try:
+        for threads, on_points in ((1, None), (2, reports.append), (2, None)):
+            numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+            runs.append(solve_orbits(rows, states, successors, estimated,
+                                     on_points=on_points))
+
+        class Stop(Exception):
+            pass
+
+        def stop(count):
+            raise Stop
+
+        with pytest.raises(Stop):
+            solve_orbits(rows, states, successors, estimated, on_points=stop)
+    finally:
+        numba.set_num_threads(default)
+    assert sum(reports) == len(rows)
+    assert (runs[0].metrics[:, METRIC.status] == STATUS.settled).sum() > 60
+    for run in runs[1:]:
+        for name in ("metrics", "finals", "multipliers", "errors", "steps", "rk4_steps"):
+            np.testing.assert_array_equal(getattr(run, name), getattr(runs[0], name), name)
 
 
 def _transient(rows, states):
