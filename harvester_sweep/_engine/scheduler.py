@@ -14,6 +14,8 @@ A point's result does not depend on its lane, its thread or the thread count
 
 from __future__ import annotations
 
+import concurrent.futures
+import os
 import threading
 
 import numba
@@ -246,28 +248,39 @@ def run_watched(tasks, done, stop, on_points=None) -> None:
             failure.append(error)
             stop()
 
-    workers = [threading.Thread(target=run, args=(task,), name="harvester_sweep kernel",
-                                daemon=True) for task in tasks]
-    for worker in workers:
-        worker.start()
+    running = [_workers().submit(run, task) for task in tasks]
     reported = 0
     try:
-        while True:  # (at least one look: a task may end before it is first looked at)
-            alive = [worker for worker in workers if worker.is_alive()]
-            if alive:
-                alive[0].join(_POLL)
+        while running:
+            running = list(concurrent.futures.wait(running, _POLL).not_done)
             now = done()
             if on_points is not None and now > reported:
                 on_points(now - reported)
                 reported = now
-            if not alive:
-                break
     finally:
         stop()
-        for worker in workers:
-            worker.join()
+        concurrent.futures.wait(running)
     if failure:
         raise failure[0]
+
+
+_pool, _pool_pid = None, None
+_pool_lock = threading.Lock()
+
+
+def _workers() -> concurrent.futures.ThreadPoolExecutor:
+    """The threads that run :func:`run_watched`'s tasks, as many as numba may have:
+    started once in a process (and again in a forked child, which has none of its
+    parent's threads), as threads started for each call made the orbit solver's short
+    solves slower (benchmarks/results/groups_47.md)."""
+    global _pool, _pool_pid
+    with _pool_lock:
+        if _pool is None or _pool_pid != os.getpid():
+            _pool = concurrent.futures.ThreadPoolExecutor(
+                max_workers=numba.config.NUMBA_NUM_THREADS,
+                thread_name_prefix="harvester_sweep kernel")
+            _pool_pid = os.getpid()
+        return _pool
 
 
 #: The monodromies of a run that keeps none (run_points, record_series): no row's is written.
