@@ -270,8 +270,9 @@ class Orbits:
         int64 (n,): RK4 steps taken for the point: trajectory, Newton with its perturbed
         copies, error estimate and re-solves.
     rounds : numpy.ndarray
-        int64 (n,): the round (engine call, counted from 1) in which the point was done,
-        0 for a point not run: how long a solve took in calls (what run_estimate counts).
+        int64 (n,): the round of its group of lines (engine call, counted from 1) in which
+        the point was done, 0 for a point not run: how long a solve took in calls (what
+        run_estimate counts; the groups run side by side, see _solve).
     work_by_kind : numpy.ndarray
         int64 (n, len(WORK)): the RK4 steps of ``rk4_steps`` by what they were run for.
     """
