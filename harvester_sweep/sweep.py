@@ -120,8 +120,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
 
 
 #: The GIL's switch interval while a sweep sets up its next chunk in a Python thread [s]
-#: (Python's default is 5 ms): between the orbit solver's rounds the calling thread takes
-#: the GIL back to tell progress, and waits this long at most for the set-up to let go.
+#: (Python's default is 5 ms): the most the solve's Python (its set-up and results, a
+#: group's end, the progress told every 0.2 s) waits for the set-up to let go of the GIL.
 GIL_HANDOFF = 1e-4
 
 

@@ -265,11 +265,13 @@ def test_groups_of_lines_change_no_bits_and_report_every_point():
     states = np.concatenate([packed.states, down.states, alone.states])
     successors = np.concatenate([successors, np.where(cut >= 0, cut + 36, -1), [-1] * 3])
     estimated = np.arange(len(rows)) % 3 == 0
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one numba thread: a solve makes one group")
     default = numba.get_num_threads()
     runs, reports = [], []
     try:
         for threads, on_points in ((1, None), (2, reports.append), (2, None)):
-            numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+            numba.set_num_threads(threads)
             runs.append(solve_orbits(rows, states, successors, estimated,
                                      on_points=on_points))
 
