@@ -24,7 +24,6 @@ table, every ratio taken within this run, and writes benchmarks/results/speed.md
 
 from __future__ import annotations
 
-import math
 import resource
 import subprocess
 import sys
@@ -36,7 +35,13 @@ import numpy as np
 import pytest
 
 import harvester_sweep as hs
-from benchmarks.alternatives import ATOL_SCALE, diffrax_ensemble, lsoda
+from benchmarks.alternatives import (
+    diffrax_ensemble,
+    lsoda,
+    matched_time,
+    paper_reference,
+    state_error,
+)
 from benchmarks.cases import (
     ALTERNATIVE_ROUNDS,
     COLD_START_ROUNDS,
@@ -51,7 +56,6 @@ from harvester_sweep import _engine, packing, results
 from harvester_sweep._engine import lanes
 from harvester_sweep._engine.layouts import GROUP, LANE, LANES
 from harvester_sweep.jit import JIT
-from tests.helpers import Reference
 
 ROOT = Path(__file__).resolve().parents[1]
 ENSEMBLE = 64
@@ -132,28 +136,12 @@ def test_lane_loop_alone(benchmark, figures):
 
 
 ACCURACIES = (1e-7, 1e-5)  # the engine's default, and an engineering accuracy
-# The alternatives run from rest until the transient has decayed by this factor (from the
-# orbit's spectral radius): long enough for each to come within the engine's error of the
-# orbit at its tighter tolerances.
-TRANSIENT_DECAY = 1e-12
 
 
 @pytest.fixture(scope="module", params=ACCURACIES, ids=lambda a: f"accuracy={a:g}")
 def paper(request):
-    """The paper scene at an accuracy; the state of its exact periodic orbit at forcing
-    phase 0 (DOP853 at rtol 1e-12 from the engine's orbit, until the difference has decayed
-    below 1e-16); the periods the alternatives integrate from rest."""
-    scene = hs.run_scene("paper", accuracy=request.param)
-    p, rho = scene.parameters, scene.metrics["spectral_radius"]
-    settle = math.ceil(math.log(1e-16) / math.log(rho))
-    exact = Reference(p).integrate(scene.state[:3], 0.0, settle / p["frequency"])[0][:3]
-    return p, exact, math.ceil(math.log(TRANSIENT_DECAY) / math.log(rho))
-
-
-def _error(state, exact) -> float:
-    """max over (x, v, V) of |state - reference| / (1e-6 m, 1e-2 m/s, 1e-5 V)."""
-    errors = np.max(np.abs(np.asarray(state)[..., :3] - exact) / ATOL_SCALE, axis=-1)
-    return errors if errors.ndim else float(errors)
+    """The paper scene at an accuracy (alternatives.paper_reference)."""
+    return paper_reference(request.param)
 
 
 def test_engine_per_point(benchmark, figures, paper):
@@ -187,34 +175,9 @@ def test_engine_per_point(benchmark, figures, paper):
     figures["ensemble"] = ENSEMBLE
     figures.setdefault("points", {})[p["accuracy"]] = {
         "engine": min(times[threads]) / ENSEMBLE, "engine_1": min(times[1]) / ENSEMBLE,
-        "threads": threads, "error": _error(solved.finals[0], exact),
+        "threads": threads, "error": state_error(solved.finals[0], exact),
         "periods": int(solved.metrics[0, _engine.METRIC.periods_run]),
         "rk4_steps": int(solved.rk4_steps[0]), "steps": int(solved.steps[0])}
-
-
-def _matched(runs: list[tuple[float, float, np.ndarray]], exact, target: float
-             ) -> tuple[float, str]:
-    """Time [s] a transient integration takes to come, and stay, within ``target`` of the
-    orbit ``exact``, from (rtol, time, states at every period boundary) runs.
-
-    Each run's time is scaled to the first period boundary from which every later sample
-    is within the target (an oracle's stopping rule: the alternative's best case); the
-    shortest over the tolerances (each the best of its rounds) is returned."""
-    best = {}
-    for rtol, seconds, states in runs:
-        if rtol not in best or seconds < best[rtol][0]:
-            best[rtol] = (seconds, states)
-    found = []
-    for rtol, (seconds, states) in best.items():
-        above = np.flatnonzero(_error(states, exact) > target)
-        k = above[-1] + 1 if above.size else 0
-        if k < len(states):
-            found.append((seconds * k / (len(states) - 1), rtol, k))
-    if not found:
-        closest = min(_error(states[-1], exact) for _, states in best.values())
-        return math.inf, f"never within it (closest {closest:.1e})"
-    seconds, rtol, k = min(found)
-    return seconds, f"rtol {rtol:g}, from rest for {k} periods"
 
 
 def test_lsoda_per_point(benchmark, figures, paper):
@@ -228,7 +191,7 @@ def test_lsoda_per_point(benchmark, figures, paper):
 
     benchmark.pedantic(run, rounds=ALTERNATIVE_ROUNDS, iterations=1)
     row = figures["points"][p["accuracy"]]
-    row["lsoda"], row["lsoda_how"] = _matched(runs, exact, row["error"])
+    row["lsoda"], row["lsoda_how"] = matched_time(runs, exact, row["error"])
 
 
 def test_diffrax_per_point(benchmark, figures, paper):
@@ -247,7 +210,7 @@ def test_diffrax_per_point(benchmark, figures, paper):
 
     benchmark.pedantic(run, rounds=ALTERNATIVE_ROUNDS, iterations=1)
     row = figures["points"][p["accuracy"]]
-    row["diffrax"], row["diffrax_how"] = _matched(runs, exact, row["error"])
+    row["diffrax"], row["diffrax_how"] = matched_time(runs, exact, row["error"])
 
 
 def _cli(args: list[str]) -> None:
