@@ -42,9 +42,10 @@ RTOLS = {"lsoda": (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11),
 
 
 def _scene(accuracy: float) -> dict:
+    """The paper scene's parameters at ``accuracy`` [-] (paper_reference's, unsolved)."""
     import harvester_sweep as hs
 
-    return hs.run_scene("paper", accuracy=accuracy).parameters
+    return hs.resolve_parameters("paper", accuracy=accuracy)
 
 
 def _engine(accuracy: float) -> dict:

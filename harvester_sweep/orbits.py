@@ -385,7 +385,7 @@ def _solve(pts: _Points, threads: int, on_points) -> None:
         successors = pts.counts[:, _COUNT.successors].copy()
         for group, part in zip(groups, parts):
             for whole, piece in zip(pts, part):
-                if whole is not pts.calls:
+                if whole is not pts.calls and whole is not pts.rows:  # (rows: read only)
                     whole[group] = piece
         pts.counts[:, _COUNT.successors] = successors
         pts.calls[0] = max(part.calls[0] for part in parts)

@@ -254,6 +254,8 @@ def test_groups_of_lines_change_no_bits_and_report_every_point():
     own: lines of different lengths (frequency continuations up and down, points alone)
     give the same bits on one thread and two, with progress told or not; the progress
     told adds up to the points; an error told by the progress stops the solve."""
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one numba thread: a solve makes one group")
     packed, successors = _grid("up", n=6)
     down, down_successors = _grid("down", n=6)
     alone = packing.pack_points([resolve_parameters("paper", gap=g, frequency=f,
@@ -265,8 +267,6 @@ def test_groups_of_lines_change_no_bits_and_report_every_point():
     states = np.concatenate([packed.states, down.states, alone.states])
     successors = np.concatenate([successors, np.where(cut >= 0, cut + 36, -1), [-1] * 3])
     estimated = np.arange(len(rows)) % 3 == 0
-    if numba.config.NUMBA_NUM_THREADS < 2:
-        pytest.skip("one numba thread: a solve makes one group")
     default = numba.get_num_threads()
     runs, reports = [], []
     try:
