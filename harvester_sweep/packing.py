@@ -29,55 +29,91 @@ MULTI = 4.0
 
 def pack_parameters(p: dict) -> np.ndarray:
     """The engine's parameter row (layouts.PARAM) of a validated parameter dict [SI]."""
-    wn = 2.0 * math.pi * p["natural_frequency"]
-    m = p["mass"]
-    row = np.zeros(len(PARAM))
+    return pack_rows([p])[0]
+
+
+def pack_rows(points) -> np.ndarray:
+    """The engine's parameter rows (n, len(layouts.PARAM)) of validated parameter dicts
+    [SI], made column by column: a sweep's chunk packs thousands of points at once, and
+    each column is the arithmetic a point's value takes, in the same order (the same bits
+    as one point at a time)."""
+    c = _columns(points, _NUMBERS)
+    rows = np.zeros((len(points), len(PARAM)))
+    wn = 2.0 * math.pi * c["natural_frequency"]
+    m = c["mass"]
     # (the tip's forcing mu_1 A; a moving stop shares it, hence mu_1 = 1 beside one)
-    row[PARAM.amplitude] = amplitude = forcing_amplitude(p)
-    row[PARAM.wn2] = wn * wn
-    row[PARAM.cm] = 2.0 * p["damping_ratio"] * wn
-    row[PARAM.thm] = p["coupling"] / m
-    row[PARAM.mass] = m
-    row[PARAM.gap], row[PARAM.khm], row[PARAM.ch], row[PARAM.latch] = _stop_row(p)
-    row[PARAM.irc] = 1.0 / (p["resistance"] * p["capacitance"])
-    row[PARAM.thc] = p["coupling"] / p["capacitance"]
-    row[PARAM.resistance] = p["resistance"]
-    row[PARAM.period] = 1.0 / p["frequency"]
-    row[PARAM.steps] = p["steps_per_period"]
-    row[PARAM.max_periods] = 0.0 if refusal(p) else p["max_periods"]
-    row[PARAM.tolerance] = p["settle_tolerance"]
-    static = amplitude / (wn * wn) / max(2.0 * p["damping_ratio"], 1e-4)
-    row[PARAM.x_limit] = 1e3 * (abs(p["gap"]) + static + 1e-9)
-    row[PARAM.locate] = 1.0 if p["locate_switches"] else 0.0
-    w = 2.0 * math.pi * p["frequency"]
-    row[PARAM.v_per_x] = w
-    tau = p["resistance"] * p["capacitance"]
-    row[PARAM.voltage_per_x] = p["coupling"] / p["capacitance"] * min(1.0, w * tau)
-    row[PARAM.phase] = 0.0  # t = 0 at a zero of the forcing; basins start elsewhere too
-    lower = lower_stop(p)
-    row[PARAM.lower_gap] = NO_STOP
-    if lower is not None:
-        (row[PARAM.lower_gap], row[PARAM.lower_khm], row[PARAM.lower_ch],
-         row[PARAM.lower_latch]) = _stop_row(lower)
-    if p["stop_support_stiffness"] is not None:  # a stop on a spring
-        ms = p["stop_mass"]
-        row[PARAM.stop_wn2] = p["stop_support_stiffness"] / ms
-        row[PARAM.stop_cm] = p["stop_support_damping"] / ms
-        row[PARAM.stop_ratio] = m / ms
-    row[PARAM.book] = 1.0  # (every metric)
-    row[PARAM.multi] = MULTI
-    return row
+    rows[:, PARAM.amplitude] = amplitude = forcing_amplitude(c)
+    rows[:, PARAM.wn2] = wn * wn
+    rows[:, PARAM.cm] = 2.0 * c["damping_ratio"] * wn
+    rows[:, PARAM.thm] = c["coupling"] / m
+    rows[:, PARAM.mass] = m
+    (rows[:, PARAM.gap], rows[:, PARAM.khm], rows[:, PARAM.ch],
+     rows[:, PARAM.latch]) = _stop_columns(points, c)
+    rows[:, PARAM.irc] = 1.0 / (c["resistance"] * c["capacitance"])
+    rows[:, PARAM.thc] = c["coupling"] / c["capacitance"]
+    rows[:, PARAM.resistance] = c["resistance"]
+    rows[:, PARAM.period] = 1.0 / c["frequency"]
+    rows[:, PARAM.steps] = c["steps_per_period"]
+    rows[:, PARAM.max_periods] = np.where(
+        _too_stiff(c["steps_per_period"], c["max_steps_per_period"]), 0.0, c["max_periods"])
+    rows[:, PARAM.tolerance] = c["settle_tolerance"]
+    static = amplitude / (wn * wn) / np.maximum(2.0 * c["damping_ratio"], 1e-4)
+    rows[:, PARAM.x_limit] = 1e3 * (np.abs(c["gap"]) + static + 1e-9)
+    rows[:, PARAM.locate] = [1.0 if p["locate_switches"] else 0.0 for p in points]
+    w = 2.0 * math.pi * c["frequency"]
+    rows[:, PARAM.v_per_x] = w
+    tau = c["resistance"] * c["capacitance"]
+    rows[:, PARAM.voltage_per_x] = c["coupling"] / c["capacitance"] * np.minimum(1.0, w * tau)
+    rows[:, PARAM.phase] = 0.0  # t = 0 at a zero of the forcing; basins start elsewhere too
+    rows[:, PARAM.lower_gap] = NO_STOP
+    lowers = [(i, lower) for i, lower in enumerate(map(lower_stop, points))
+              if lower is not None]
+    if lowers:
+        where = [i for i, _ in lowers]
+        stops = [lower for _, lower in lowers]
+        (rows[where, PARAM.lower_gap], rows[where, PARAM.lower_khm], rows[where, PARAM.lower_ch],
+         rows[where, PARAM.lower_latch]) = _stop_columns(stops, _columns(stops, _STOP_NUMBERS))
+    moving = [i for i, p in enumerate(points) if p["stop_support_stiffness"] is not None]
+    if moving:  # stops on a spring
+        s = _columns([points[i] for i in moving], _MOVING_NUMBERS)
+        ms = s["stop_mass"]
+        rows[moving, PARAM.stop_wn2] = s["stop_support_stiffness"] / ms
+        rows[moving, PARAM.stop_cm] = s["stop_support_damping"] / ms
+        rows[moving, PARAM.stop_ratio] = s["mass"] / ms
+    rows[:, PARAM.book] = 1.0  # (every metric)
+    rows[:, PARAM.multi] = MULTI
+    return rows
 
 
-def _stop_row(stop: dict) -> tuple:
-    """The (upper) stop of parameter set ``stop`` as the engine reads it: gap [m] (NO_STOP
-    when hertz_stiffness is 0), k_h/m [N/(m^1.5 kg)], contact damping in fixed mode [s/m]
-    and the latched law's factor c_h v_imp (0 in fixed mode) [-]."""
-    latched = stop["contact_damping"] is None and stop["impact_velocity_mode"] == "latched"
+#: The numbers packing reads from every point, a stop's and a moving stop's.
+_STOP_NUMBERS = ("gap", "hertz_stiffness", "mass")
+_NUMBERS = _STOP_NUMBERS + (
+    "natural_frequency", "damping_ratio", "coupling", "capacitance", "resistance", "amplitude",
+    "base_forcing_factor", "frequency", "steps_per_period", "max_steps_per_period",
+    "max_periods", "settle_tolerance")
+_MOVING_NUMBERS = ("stop_support_stiffness", "stop_support_damping", "stop_mass", "mass")
+
+
+def _columns(points, names) -> dict:
+    """Each of ``names``' values over ``points``, a float array each."""
+    return {name: np.array([p[name] for p in points], dtype=float) for name in names}
+
+
+def _stop_columns(stops, c) -> tuple:
+    """The (upper) stop of each parameter set of ``stops`` (their numbers ``c``, as
+    _columns gives them) as the engine reads it: gap [m] (NO_STOP where hertz_stiffness is
+    0), k_h/m [N/(m^1.5 kg)], contact damping in fixed mode [s/m] and the latched law's
+    factor c_h v_imp (0 in fixed mode) [-]."""
+    ch, latch = np.array([_damping(stop) for stop in stops]).reshape(-1, 2).T
     # (hertz_stiffness 0 is no stop: placed beyond any motion, so that no touch is counted)
-    return (stop["gap"] if stop["hertz_stiffness"] > 0 else NO_STOP,
-            stop["hertz_stiffness"] / stop["mass"],
-            contact_damping_of(stop, stop["impact_velocity"]),
+    kh = c["hertz_stiffness"]
+    return np.where(kh > 0, c["gap"], NO_STOP), kh / c["mass"], ch, latch
+
+
+def _damping(stop: dict) -> tuple:
+    """A stop's contact damping in fixed mode [s/m] and the latched law's factor [-]."""
+    latched = stop["contact_damping"] is None and stop["impact_velocity_mode"] == "latched"
+    return (contact_damping_of(stop, stop["impact_velocity"]),
             damping_factor(stop["contact_law"], stop["restitution"]) if latched else 0.0)
 
 
@@ -92,7 +128,7 @@ def initial_state(p: dict) -> np.ndarray:
     x0 = xs0 = 0.0
     k = p["mass"] * (2.0 * math.pi * p["natural_frequency"]) ** 2
     kh, g, ks = p["hertz_stiffness"], p["gap"], p["stop_support_stiffness"]
-    if g < 0.0 and kh > 0.0 and ks is not None:
+    if _preloaded(p) and ks is not None:
         # the penetration delta in [0, -g]: delta + F (1/k + 1/k_s) = -g, F = k_h delta^1.5
         low, high = 0.0, -g
         for _ in range(200):
@@ -102,7 +138,7 @@ def initial_state(p: dict) -> np.ndarray:
             else:
                 low = delta
         x0, xs0 = -hertz.static_force(kh, delta) / k, hertz.static_force(kh, delta) / ks
-    elif g < 0.0 and kh > 0.0:
+    elif _preloaded(p):
         low, high = g, 0.0
         for _ in range(200):
             x0 = 0.5 * (low + high)
@@ -116,10 +152,22 @@ def initial_state(p: dict) -> np.ndarray:
     return state
 
 
+def _preloaded(p: dict) -> bool:
+    """Whether the (upper) stop of point ``p`` is preloaded: a stop (k_h > 0) at a gap
+    below 0."""
+    return p["gap"] < 0.0 and p["hertz_stiffness"] > 0.0
+
+
+def _too_stiff(steps, most):
+    """Whether a point of ``steps`` steps per period is refused before integration, where
+    ``most`` is its max_steps_per_period [-] (numbers or arrays)."""
+    return steps > most
+
+
 def refusal(p: dict) -> str | None:
     """Why point ``p`` is refused before integration (too stiff), or None."""
     steps = p["steps_per_period"]
-    if steps <= p["max_steps_per_period"]:
+    if not _too_stiff(steps, p["max_steps_per_period"]):
         return None
     rate, what = timescales.time_scales(p).fastest()
     return (f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
@@ -167,8 +215,12 @@ class Packed:
 
 def pack_points(points) -> Packed:
     """Pack a sequence of validated parameter dicts, each from rest."""
-    rows = np.array([pack_parameters(p) for p in points]).reshape(-1, len(PARAM))
-    states = np.array([initial_state(p) for p in points]).reshape(-1, len(STATE))
+    rows = pack_rows(points)
+    states = np.zeros((len(points), len(STATE)))
+    states[:, STATE.approach_velocity] = [p["impact_velocity"] for p in points]
+    for i, p in enumerate(points):
+        if _preloaded(p):  # (else at 0)
+            states[i] = initial_state(p)
     accuracy = np.array([p["accuracy"] if automatic_step(p) else np.nan for p in points])
     max_steps = np.array([p["max_steps_per_period"] for p in points], dtype=float)
     return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0, accuracy, max_steps)

@@ -92,17 +92,18 @@ _KEYLESS = CHOSEN | {"gap"}
 #: other than the gap usually number (examples/million_points.toml has 80 x 10 x 50), so
 #: that each is derived once, not once per gap.
 REMEMBERED = 65536
-_READERS: dict = {}  # a parameter set's names -> (those names, what reads the key's values)
+_READERS: dict = {}  # a parameter set's names -> (their number, what reads the key's values)
 
 
 def _key(p: dict) -> tuple:
-    """The key under which what is derived from parameter set ``p`` is remembered: its
-    names, and its values but the gap and those CHOSEN."""
+    """The key under which what is derived from parameter set ``p`` is remembered: the
+    number of its set of names, and its values but the gap and those CHOSEN (a number, not
+    the names themselves: a tuple's hash is not kept, and each lookup would hash them)."""
     names = tuple(p)
     known = _READERS.get(names)
     if known is None:
         known = _READERS[names] = (
-            names, operator.itemgetter(*(n for n in names if n not in _KEYLESS)))
+            len(_READERS), operator.itemgetter(*(n for n in names if n not in _KEYLESS)))
     return known[0], known[1](p)
 
 
@@ -114,8 +115,8 @@ def _remembered(derive):
     alone ask the same. Derived afresh where a value is unhashable. At most REMEMBERED
     keys (then forgotten all at once: what is derived does not depend on what is
     remembered)."""
-    reaches: dict = {}  # key -> the stop's reach [m]
-    known: dict = {}  # (key, what the gap does) -> what is derived
+    reaches: dict = {}  # key -> (the stop's reach [m], the key's number in `known`)
+    known: dict = {}  # (the key's number, what the gap does) -> what is derived
 
     @functools.wraps(derive)
     def remembered(p):
@@ -128,9 +129,9 @@ def _remembered(derive):
             if len(reaches) >= REMEMBERED:
                 reaches.clear()
                 known.clear()
-            reach = reaches[key] = _reach(_velocity(p), _slower(p))
+            reach = reaches[key] = (_reach(_velocity(p), _slower(p)), len(reaches))
         gap = p["gap"]
-        which = key, gap if gap < 0 else gap < reach
+        which = reach[1], gap if gap < 0 else gap < reach[0]
         found = known.get(which)
         if found is None:
             found = known[which] = derive(p)
