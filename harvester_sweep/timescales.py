@@ -17,6 +17,7 @@ strong coupling the load stiffens the mode far beyond the natural frequency.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import operator
 from typing import NamedTuple
@@ -93,6 +94,9 @@ _KEYLESS = CHOSEN | {"gap"}
 #: that each is derived once, not once per gap.
 REMEMBERED = 65536
 _READERS: dict = {}  # a parameter set's names -> (their number, what reads the key's values)
+# (numbers that never repeat, taken atomically: a sweep resolves its next chunk in a
+# thread while other threads may resolve too)
+_NUMBERS = itertools.count()
 
 
 def _key(p: dict) -> tuple:
@@ -103,7 +107,7 @@ def _key(p: dict) -> tuple:
     known = _READERS.get(names)
     if known is None:
         known = _READERS[names] = (
-            len(_READERS), operator.itemgetter(*(n for n in names if n not in _KEYLESS)))
+            next(_NUMBERS), operator.itemgetter(*(n for n in names if n not in _KEYLESS)))
     return known[0], known[1](p)
 
 
@@ -129,7 +133,7 @@ def _remembered(derive):
             if len(reaches) >= REMEMBERED:
                 reaches.clear()
                 known.clear()
-            reach = reaches[key] = (_reach(_velocity(p), _slower(p)), len(reaches))
+            reach = reaches[key] = (_reach(_velocity(p), _slower(p)), next(_NUMBERS))
         gap = p["gap"]
         which = reach[1], gap if gap < 0 else gap < reach[0]
         found = known.get(which)
