@@ -50,6 +50,11 @@ def coefficients(p: dict) -> dict:
             "g": p["gap"], "kh": p["hertz_stiffness"], "ch": ch}
 
 
+#: The tolerances each alternative runs at, from rest, to find the one that reaches the
+#: engine's error soonest (matched_time) [-].
+RTOLS = {"lsoda": (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11),
+         "diffrax": (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)}
+
 # The alternatives run from rest until the transient has decayed by this factor (from the
 # orbit's spectral radius): long enough for each to come within the engine's error of the
 # orbit at its tighter tolerances.

@@ -31,14 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.alternatives import matched_time, paper_reference, state_error
+from benchmarks.alternatives import RTOLS, matched_time, paper_reference, state_error
 from benchmarks.cases import ALTERNATIVE_ROUNDS, ENGINE_ROUNDS
 
 ROOT = Path(__file__).resolve().parents[1]
-ENSEMBLE = 64
-#: The tolerances each alternative runs at, as test_speed.py's [-].
-RTOLS = {"lsoda": (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11),
-         "diffrax": (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)}
+ENSEMBLE = 64  # copies of the paper scene solved at once, as a sweep's points are
 
 
 def _scene(accuracy: float) -> dict:
@@ -48,22 +45,37 @@ def _scene(accuracy: float) -> dict:
     return hs.resolve_parameters("paper", accuracy=accuracy)
 
 
+def solve_round(packed, estimated, threads: int) -> dict:
+    """One round of the engine's per-point timing: ``results.solve`` of ``packed`` on
+    numba's ``threads`` threads and on one, each solved once untimed first (test_speed.py
+    says why); the solve of each thread count, by thread count (its ``run_time`` the
+    timed one). numba is left on ``threads`` threads."""
+    import numba
+
+    from harvester_sweep import results
+
+    out = {}
+    for n in sorted({threads, 1}):
+        numba.set_num_threads(n)
+        results.solve(packed, estimated=estimated)
+        out[n] = results.solve(packed, estimated=estimated)
+    numba.set_num_threads(threads)
+    return out
+
+
 def _engine(accuracy: float) -> dict:
     """The engine's best time a point [s] on numba's threads and on one, and its orbit's
     state (x [m], v [m/s], V [V])."""
     import numba
 
-    from harvester_sweep import packing, results
+    from harvester_sweep import packing
 
     packed = packing.pack_points([_scene(accuracy)] * ENSEMBLE)
     estimated = np.ones(ENSEMBLE, dtype=bool)
     threads = numba.get_num_threads()
     times: dict = {}
     for _ in range(ENGINE_ROUNDS):
-        for n in sorted({threads, 1}):
-            numba.set_num_threads(n)
-            results.solve(packed, estimated=estimated)  # (untimed first: see test_speed.py)
-            solved = results.solve(packed, estimated=estimated)
+        for n, solved in solve_round(packed, estimated, threads).items():
             times.setdefault(n, []).append(solved.run_time / ENSEMBLE)
     return {"engine": min(times[threads]), "engine_1": min(times[1]), "threads": threads,
             "state": solved.finals[0, :3].tolist()}
@@ -96,17 +108,9 @@ def _child(kind: str, accuracy: float, periods: int) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def _cpu() -> str:
-    try:
-        text = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-    except OSError:
-        return "unknown"
-    names = [line.split(":", 1)[1].strip() for line in text.splitlines()
-             if line.startswith("Model name")]
-    return names[0] if names else "unknown"
-
-
 def main(accuracy: float, rounds: int) -> None:
+    from benchmarks.variants import cpu_model
+
     _, exact, periods = paper_reference(accuracy)
     rows = []
     for r in range(rounds):
@@ -123,8 +127,9 @@ def main(accuracy: float, rounds: int) -> None:
               f"{row['threads']} threads, {1e3 * row['engine_1']:.3f} on 1; LSODA "
               f"{1e3 * row['lsoda']:.2f} ms ({row['lsoda_how']}), diffrax "
               f"{1e3 * row['diffrax']:.2f} ms ({row['diffrax_how']})", flush=True)
-    print(f"\nThe paper scene at accuracy {accuracy:g}, ensemble of {ENSEMBLE}; {_cpu()}; each "
-          "side in a process of its own, in turn, each ratio within its round.\n")
+    print(f"\nThe paper scene at accuracy {accuracy:g}, ensemble of {ENSEMBLE}; "
+          f"{cpu_model()}; each side in a process of its own, in turn, each ratio within "
+          "its round.\n")
     print("| round | engine [ms a point] | 1 thread | LSODA [ms] | x | x per core "
           "| diffrax [ms] | x | x per core |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")

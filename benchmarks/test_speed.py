@@ -36,6 +36,7 @@ import pytest
 
 import harvester_sweep as hs
 from benchmarks.alternatives import (
+    RTOLS,
     diffrax_ensemble,
     lsoda,
     matched_time,
@@ -52,13 +53,13 @@ from benchmarks.cases import (
     SWEEP_ROUNDS,
     sweep_spec,
 )
-from harvester_sweep import _engine, packing, results
+from benchmarks.per_point import ENSEMBLE, solve_round
+from harvester_sweep import _engine, packing
 from harvester_sweep._engine import lanes
 from harvester_sweep._engine.layouts import GROUP, LANE, LANES
 from harvester_sweep.jit import JIT
 
 ROOT = Path(__file__).resolve().parents[1]
-ENSEMBLE = 64
 
 
 def _sweep(grid: dict, output: Path, directions=None):
@@ -155,18 +156,14 @@ def test_engine_per_point(benchmark, figures, paper):
     times, out = {}, {}
 
     def run():
-        for n in sorted({threads, 1}):
-            numba.set_num_threads(n)
-            # Untimed first, and no pause between rounds: a core left idle wakes up late
-            # on this virtual machine (after 0.2 s idle, a two-thread run of 64 points at
-            # 1e-5 took 0.24 ms a point, median of 30 runs, against 0.14 back to back);
-            # a sweep pays that once, not per point.
-            results.solve(packed, estimated=estimated)
-            solved = results.solve(packed, estimated=estimated)
+        # (each thread count solved untimed first, and no pause between rounds: a core
+        # left idle wakes up late on this virtual machine: after 0.2 s idle, a two-thread
+        # run of 64 points at 1e-5 took 0.24 ms a point, median of 30 runs, against 0.14
+        # back to back; a sweep pays that once, not per point)
+        for n, solved in solve_round(packed, estimated, threads).items():
             times.setdefault(n, []).append(solved.run_time)
             assert np.all(solved.finals == solved.finals[0])  # every lane the same bits
             out[n] = solved
-        numba.set_num_threads(threads)
 
     benchmark.pedantic(run, rounds=ENGINE_ROUNDS, iterations=1)
     solved = out[1]
@@ -185,7 +182,7 @@ def test_lsoda_per_point(benchmark, figures, paper):
     runs = []
 
     def run():
-        for rtol in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
+        for rtol in RTOLS["lsoda"]:
             seconds, states = lsoda(p, periods, rtol)
             runs.append((rtol, seconds, states))
 
@@ -204,7 +201,7 @@ def test_diffrax_per_point(benchmark, figures, paper):
     runs = []
 
     def run():
-        for rtol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
+        for rtol in RTOLS["diffrax"]:
             seconds, states = diffrax_ensemble(p, periods, ENSEMBLE, rtol)
             runs.append((rtol, seconds, states[ENSEMBLE // 2]))
 
