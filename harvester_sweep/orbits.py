@@ -343,32 +343,36 @@ def solve_orbits(rows, states, successors=None, estimated=None, accuracy=None,
     extent = (period_map.contact_free_extent(rows, states, GUESS_STEPS) if guessed
               else np.zeros((n, 2)))
     _set_up(pts, _linear_amplitude(rows), guessed, extent, np.flatnonzero(heads))
-    _solve(pts, threads, on_points)
-    return _result(pts, samples)
+    return _result(pts, samples, _solve(pts, threads, on_points))
 
 
-def _solve(pts: _Points, threads: int, on_points) -> None:
-    """Run the rounds of ``pts`` until every point is done, on ``threads`` threads.
+def _solve(pts: _Points, threads: int, on_points) -> np.ndarray:
+    """Run the rounds of ``pts`` until every point is done, on ``threads`` threads, and
+    return the points' Floquet multipliers (_multipliers).
 
     The lines (a point, or a continuation's points) are dealt out to groups, one for each
     thread while lines last, and each group is solved in a thread of its own, its engine
     calls on one thread: a round of a solve waits for its slowest point, and a round of
     few points (a continuation's, a line's points coming one after the other) is mostly
     short calls and the algebra between them, on one core. The last group left runs on
-    every thread. A point's result does not depend on its group.
+    every thread. A group's multipliers are taken in its thread, as it ends (LAPACK's, a
+    matrix at a time: the same bits in any group). A point's result does not depend on its
+    group.
     """
     groups = _groups(pts.counts[:, _COUNT.successors], threads)
     team = np.zeros((len(groups), len(_TEAM)), dtype=np.int64)
     team[:, _TEAM.threads] = threads if len(groups) == 1 else 1
     if len(groups) == 1 and on_points is None:
         _ran(_rounds(pts, team, 0))
-        return
+        return _multipliers(pts)
     parts = [pts] if len(groups) == 1 else [_part(pts, group) for group in groups]
+    multipliers = [None] * len(groups)
     lock, running = threading.Lock(), [len(groups)]
 
     def solve(g):
         numba.set_num_threads(threads)  # (numba's thread count is per calling thread)
         _ran(_rounds(parts[g], team, g))
+        multipliers[g] = _multipliers(parts[g])
         with lock:
             running[0] -= 1
             if running[0] == 1:
@@ -381,14 +385,18 @@ def _solve(pts: _Points, threads: int, on_points) -> None:
 
     run_watched([lambda g=g: solve(g) for g in range(len(groups))],
                 lambda: int(team[:, _TEAM.done].sum()), stop, on_points)
-    if len(groups) > 1:
-        successors = pts.counts[:, _COUNT.successors].copy()
-        for group, part in zip(groups, parts):
-            for whole, piece in zip(pts, part):
-                if whole is not pts.calls and whole is not pts.rows:  # (rows: read only)
-                    whole[group] = piece
-        pts.counts[:, _COUNT.successors] = successors
-        pts.calls[0] = max(part.calls[0] for part in parts)
+    if len(groups) == 1:
+        return multipliers[0]
+    successors = pts.counts[:, _COUNT.successors].copy()
+    whole_multipliers = np.empty((len(pts.rows), pts.components.shape[2]), dtype=complex)
+    for group, part, piece in zip(groups, parts, multipliers):
+        whole_multipliers[group] = piece
+        for whole, column in zip(pts, part):
+            if whole is not pts.calls and whole is not pts.rows:  # (rows: read only)
+                whole[group] = column
+    pts.counts[:, _COUNT.successors] = successors
+    pts.calls[0] = max(part.calls[0] for part in parts)
+    return whole_multipliers
 
 
 def _ran(outcome: int) -> None:
@@ -403,6 +411,9 @@ def _groups(successors, threads: int) -> list:
     gets its share of every part of a grid (neighbouring points cost alike)."""
     n = len(successors)
     linked = successors[successors >= 0]
+    if not linked.size:  # (points alone, each a line: dealt out as below, by slices)
+        count = min(threads, n)
+        return [np.arange(g, n, count) for g in range(count)] if count > 1 else [np.arange(n)]
     heads = np.setdiff1d(np.arange(n), linked)
     count = min(threads, len(heads))
     if count <= 1:
@@ -469,7 +480,19 @@ def _linear_amplitude(rows):
     return np.maximum(x, gap * 1e-3) + 1e-30
 
 
-def _result(pts: _Points, samples: int) -> Orbits:
+def _multipliers(pts: _Points) -> np.ndarray:
+    """The Floquet multipliers (n, D) of the solved points ``pts`` [-], largest modulus
+    first; NaN where a point did not settle."""
+    settled = pts.counts[:, _COUNT.status] == STATUS.settled
+    multipliers = np.full((len(pts.rows), pts.components.shape[2]), np.nan + 0j)
+    if settled.any():
+        multipliers[settled] = sorted_multipliers(
+            pts.jacobians[settled, _JACOBIANS.jacobian])
+    return multipliers
+
+
+def _result(pts: _Points, samples: int, multipliers) -> Orbits:
+    """The solved points ``pts`` as Orbits, with their ``multipliers`` (_multipliers)."""
     n, size = len(pts.rows), pts.components.shape[2]
     metrics = pts.metric_rows[:, _METRIC_ROWS.metrics].copy()
     status, p = pts.counts[:, _COUNT.status], pts.counts[:, _COUNT.p]
@@ -477,10 +500,6 @@ def _result(pts: _Points, samples: int) -> Orbits:
     metrics[:, METRIC.status] = status
     metrics[:, METRIC.orbit_period] = np.where(settled, p, 0)
     metrics[:, METRIC.periods_run] = pts.reals[:, _REAL.run]
-    multipliers = np.full((n, size), np.nan + 0j)
-    if settled.any():
-        multipliers[settled] = sorted_multipliers(
-            pts.jacobians[settled, _JACOBIANS.jacobian])
     strobes = np.full((n, samples, size), np.nan)
     age = np.arange(samples)[::-1]  # periods before the end
     # a settled orbit repeats: its p + 1 samples tiled; else the last run's samples
