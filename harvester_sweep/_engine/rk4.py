@@ -140,10 +140,13 @@ def switch_step(x, v, V, a0, xn, vn, Vn, s0, c0, n_steps, h, A, k):
 
 @njit(**JIT)
 def _pieces_rate(x, v, V, start, length, fractions, reverse, s0, c0, n_steps, h, A, k,
-                 dstart, dlength):
+                 dstart, dlength, L=None, j=0):
     """The rate of the end state of :func:`pieces` (the same arguments) [m, m/s, V per unit]
     where its start moves by ``dstart`` and its length by ``dlength`` (fractions of the
-    step) per unit: the sub-steps' RK4 stages differentiated by their times and lengths."""
+    step) per unit: the sub-steps' RK4 stages differentiated by their times and lengths.
+    With a lane table ``L``, lane ``j``'s tangents are carried through the sub-steps too,
+    as :func:`pieces` carries them: each sub-step's stages then serve the state, its
+    tangents and its rate at once."""
     w = math.pi / n_steps
     omega = 2.0 * w / h  # [rad/s]
     dx = dv = dV = 0.0
@@ -157,6 +160,8 @@ def _pieces_rate(x, v, V, start, length, fractions, reverse, s0, c0, n_steps, h,
         r0, rm, r1 = (_forcing_rate(A, s0, c0, 2.0 * w * at, omega),
                       _forcing_rate(A, s0, c0, w * (2.0 * at + dt), omega),
                       _forcing_rate(A, s0, c0, 2.0 * w * (at + dt), omega))
+        if L is not None:
+            tangents.through_step_inline(L, j, x, v, V, dt * h, f0, fm, f1, k)
         dx, dv, dV = rk4_moved(x, v, V, dt * h, f0, fm, f1, r0, rm, r1, k, dx, dv, dV,
                                moved * h, piece * dlength * h)
         x, v, V, _, _ = rk4(x, v, V, dt * h, f0, fm, f1, k)
@@ -212,16 +217,20 @@ def switch_tangents(L, j, x, v, V, xe, ve, Ve, kind, theta, before_fractions,
         m0 = -_normal_change(L, j, 0, slopes, theta * h, before, ex, ev) / rate
         m1 = -_normal_change(L, j, 1, slopes, theta * h, before, ex, ev) / rate
         m2 = -_normal_change(L, j, 2, slopes, theta * h, before, ex, ev) / rate
-    pieces(x, v, V, 0.0, theta, before_fractions, True, s0, c0, n_steps, h, A, before, L, j)
-    if moves:  # the pieces up to theta (the one sub-step's, where they are that), ...
-        bx, bv, bV = rx, rv, rV
-        if before_fractions.shape[0] > 1:
-            bx, bv, bV = _pieces_rate(x, v, V, 0.0, theta, before_fractions, True, s0, c0,
-                                      n_steps, h, A, before, 0.0, 1.0)
-        _add_moved(L, j, bx, bv, bV, m0, m1, m2)
-    pieces(xe, ve, Ve, theta, 1.0 - theta, after_fractions, False, s0, c0, n_steps, h, A,
-           after, L, j)
-    if moves:  # ... and after it, from the same state
+    # the tangents through the pieces up to theta, with their rate where theta moves (the
+    # one sub-step's, where they are that), ...
+    if moves and before_fractions.shape[0] > 1:
+        rx, rv, rV = _pieces_rate(x, v, V, 0.0, theta, before_fractions, True, s0, c0,
+                                  n_steps, h, A, before, 0.0, 1.0, L, j)
+    else:
+        pieces(x, v, V, 0.0, theta, before_fractions, True, s0, c0, n_steps, h, A, before, L, j)
+    if moves:
+        _add_moved(L, j, rx, rv, rV, m0, m1, m2)
+    # ... and after it, from the same state
+    if moves:
         ax, av, aV = _pieces_rate(xe, ve, Ve, theta, 1.0 - theta, after_fractions, False, s0,
-                                  c0, n_steps, h, A, after, 1.0, -1.0)
+                                  c0, n_steps, h, A, after, 1.0, -1.0, L, j)
         _add_moved(L, j, ax, av, aV, m0, m1, m2)
+    else:
+        pieces(xe, ve, Ve, theta, 1.0 - theta, after_fractions, False, s0, c0, n_steps, h, A,
+               after, L, j)

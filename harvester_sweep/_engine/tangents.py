@@ -102,6 +102,13 @@ def catch_up(L, j, it):
 def through_step(L, j, x, v, V, dt, f0, fm, f1, k):
     """Carry lane ``j``'s T through one RK4 step of dt [s] from (x, v, V) (tip_mass.rk4's
     arguments)."""
+    through_step_inline(L, j, x, v, V, dt, f0, fm, f1, k)
+
+
+@njit(inline="always", **JIT)
+def through_step_inline(L, j, x, v, V, dt, f0, fm, f1, k):
+    """:func:`through_step` written into its caller, whose own RK4 stages of the same step
+    (the state's, their rates) it then shares."""
     slopes = rk4_slopes(x, v, V, dt, f0, fm, f1, k)
     for c in range(3):
         dx, dv, dV = rk4_tangent(slopes, dt, k, L[row(0, c) + j], L[row(1, c) + j],
