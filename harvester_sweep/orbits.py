@@ -411,9 +411,6 @@ def _groups(successors, threads: int) -> list:
     gets its share of every part of a grid (neighbouring points cost alike)."""
     n = len(successors)
     linked = successors[successors >= 0]
-    if not linked.size:  # (points alone, each a line: dealt out as below, by slices)
-        count = min(threads, n)
-        return [np.arange(g, n, count) for g in range(count)] if count > 1 else [np.arange(n)]
     heads = np.setdiff1d(np.arange(n), linked)
     count = min(threads, len(heads))
     if count <= 1:

@@ -125,10 +125,27 @@ def initial_state(p: dict) -> np.ndarray:
     unless the stop is preloaded (g < 0), then between g and 0 (found by bisection). A
     preloaded moving stop gives way too, to ``k_s x_s0 = k_h delta^1.5``.
     """
-    x0 = xs0 = 0.0
+    return rest_states([p])[0]
+
+
+def rest_states(points) -> np.ndarray:
+    """:func:`initial_state` of each of ``points`` (n, len(layouts.STATE)): at 0 but where
+    a stop is preloaded, each point's equilibrium found alone."""
+    states = np.zeros((len(points), len(STATE)))
+    states[:, STATE.approach_velocity] = [p["impact_velocity"] for p in points]
+    for i, p in enumerate(points):
+        if _preloaded(p):
+            states[i, STATE.x], states[i, STATE.stop_x] = _preloaded_rest(p)
+    return states
+
+
+def _preloaded_rest(p: dict) -> tuple:
+    """x_0 [m] and the stop's x_s0 [m] at rest of point ``p``, whose stop is preloaded
+    (:func:`initial_state`)."""
+    xs0 = 0.0
     k = p["mass"] * (2.0 * math.pi * p["natural_frequency"]) ** 2
     kh, g, ks = p["hertz_stiffness"], p["gap"], p["stop_support_stiffness"]
-    if _preloaded(p) and ks is not None:
+    if ks is not None:
         # the penetration delta in [0, -g]: delta + F (1/k + 1/k_s) = -g, F = k_h delta^1.5
         low, high = 0.0, -g
         for _ in range(200):
@@ -137,19 +154,15 @@ def initial_state(p: dict) -> np.ndarray:
                 high = delta
             else:
                 low = delta
-        x0, xs0 = -hertz.static_force(kh, delta) / k, hertz.static_force(kh, delta) / ks
-    elif _preloaded(p):
-        low, high = g, 0.0
-        for _ in range(200):
-            x0 = 0.5 * (low + high)
-            if k * x0 + hertz.static_force(kh, x0 - g) > 0.0:
-                high = x0
-            else:
-                low = x0
-    state = np.zeros(len(STATE))
-    state[STATE.x], state[STATE.approach_velocity] = x0, p["impact_velocity"]
-    state[STATE.stop_x] = xs0
-    return state
+        return -hertz.static_force(kh, delta) / k, hertz.static_force(kh, delta) / ks
+    low, high = g, 0.0
+    for _ in range(200):
+        x0 = 0.5 * (low + high)
+        if k * x0 + hertz.static_force(kh, x0 - g) > 0.0:
+            high = x0
+        else:
+            low = x0
+    return x0, xs0
 
 
 def _preloaded(p: dict) -> bool:
@@ -216,11 +229,7 @@ class Packed:
 def pack_points(points) -> Packed:
     """Pack a sequence of validated parameter dicts, each from rest."""
     rows = pack_rows(points)
-    states = np.zeros((len(points), len(STATE)))
-    states[:, STATE.approach_velocity] = [p["impact_velocity"] for p in points]
-    for i, p in enumerate(points):
-        if _preloaded(p):  # (else at 0)
-            states[i] = initial_state(p)
+    states = rest_states(points)
     accuracy = np.array([p["accuracy"] if automatic_step(p) else np.nan for p in points])
     max_steps = np.array([p["max_steps_per_period"] for p in points], dtype=float)
     return Packed(rows, states, rows[:, PARAM.max_periods] == 0.0, accuracy, max_steps)

@@ -226,8 +226,7 @@ def switch_tangents(L, j, x, v, V, xe, ve, Ve, kind, theta, before_fractions,
         pieces(x, v, V, 0.0, theta, before_fractions, True, s0, c0, n_steps, h, A, before, L, j)
     if moves:
         _add_moved(L, j, rx, rv, rV, m0, m1, m2)
-    # ... and after it, from the same state
-    if moves:
+        # ... and after it, from the same state
         ax, av, aV = _pieces_rate(xe, ve, Ve, theta, 1.0 - theta, after_fractions, False, s0,
                                   c0, n_steps, h, A, after, 1.0, -1.0, L, j)
         _add_moved(L, j, ax, av, aV, m0, m1, m2)
