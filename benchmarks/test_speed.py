@@ -56,7 +56,7 @@ from benchmarks.cases import (
 from benchmarks.per_point import ENSEMBLE, solve_round
 from harvester_sweep import _engine, packing
 from harvester_sweep._engine import lanes
-from harvester_sweep._engine.layouts import GROUP, LANE, LANES
+from harvester_sweep._engine.layouts import LANE, LANES
 from harvester_sweep.jit import JIT
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -108,7 +108,7 @@ def _lane_loop(L, steps):
     for j in range(LANES):
         L[LANE.k_end + j] = np.inf  # never at a stop
     for _ in range(steps):
-        lanes.lane_steps(L, LANES // GROUP, 0.0)
+        lanes.lane_steps(L, 0.0)
 
 
 def test_lane_loop_alone(benchmark, figures):

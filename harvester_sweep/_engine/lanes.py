@@ -345,9 +345,9 @@ def mirror(L, j):
 
 
 @njit(**JIT)
-def lane_steps(L, groups, it):
-    """One plain RK4 step of the lanes of the first ``groups`` groups, branch-free so that
-    LLVM vectorizes it.
+def lane_steps(L, it):
+    """One plain RK4 step of the lanes of both groups, branch-free so that LLVM vectorizes
+    it.
 
     The trial steps run group by group into trial rows: a group is GROUP lanes (two AVX2
     vectors), written out with constant bounds so that it compiles to vector code only.
@@ -360,15 +360,27 @@ def lane_steps(L, groups, it):
     scalar code once the trial step got short. A second loop commits: lanes whose step
     needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in LANE.need and left
-    for :func:`finish_step`. Returns the number of lanes with a point marked, and how
-    many of them take quarter steps (see quarter_steps).
+    for :func:`finish_step`. It commits both groups in one loop, in the contact form if
+    either has a lane in contact (a lane out of contact commits the same bits either
+    way): a loop for each group, each in its own form, compiled to slower code
+    (benchmarks/results/commit_groups_47.md). Returns the number of lanes with a point
+    marked, and how many of them take quarter steps (see quarter_steps).
     """
-    touching = _trial_group(L, 0)
-    if groups > 1:  # (else the second group is idle: no lane in contact)
-        touching += _trial_group(L, GROUP)
+    touching = _trial_group(L, 0) + _trial_group(L, GROUP)
     if touching == 0.0:
-        return _commit_steps(L, False, it)
-    return _commit_steps(L, True, it)
+        return _commit_steps(L, False, it, LANES)
+    return _commit_steps(L, True, it, LANES)
+
+
+@njit(**JIT)
+def first_group_steps(L, it):
+    """:func:`lane_steps` of a table whose second group is idle (at most GROUP points: the
+    last points of a call, a round of few lines): the first group's trial step and its
+    commit alone. A function of its own, as lane_steps with a branch for it compiled to
+    slower code for full tables (benchmarks/results/commit_groups_47.md)."""
+    if _trial_group(L, 0) == 0.0:
+        return _commit_steps(L, False, it, GROUP)
+    return _commit_steps(L, True, it, GROUP)
 
 
 @njit(inline="always", **JIT)
@@ -450,9 +462,9 @@ def _trial_steps(L, j0, contact):
 
 
 @njit(inline="always", **JIT)
-def _commit_steps(L, contact, it):
-    """Commit the trial step of every lane that needs nothing more (see lane_steps), in
-    iteration ``it``.
+def _commit_steps(L, contact, it, lanes):
+    """Commit the trial step of every lane of the first ``lanes`` (GROUP or LANES) that
+    needs nothing more (see lane_steps), in iteration ``it``.
 
     With ``contact=False`` no lane is in contact: every lane locates its switches (plain
     fixed steps keep the contact on), the force is 0 and stays so, and neither the force
@@ -461,7 +473,7 @@ def _commit_steps(L, contact, it):
     idle) marked LANE.need, and how many of them take quarter steps (_quarter).
     """
     marked, quarters = 0, 0
-    for j in range(LANES):
+    for j in range(lanes):
         x, v, V, ch = L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j], L[LANE.ch + j]
         xn, vn, Vn = L[LANE.x_trial + j], L[LANE.v_trial + j], L[LANE.voltage_trial + j]
         g, cb, sb = L[LANE.gap + j], L[LANE.cos_step + j], L[LANE.sin_step + j]
@@ -1049,7 +1061,7 @@ def idle(L, j):
     L[LANE.sign + j], L[LANE.flip_below + j] = 1.0, -np.inf
     L[LANE.stop_ratio + j], L[LANE.stop_on + j] = 0.0, 0.0
     L[LANE.stop_x + j], L[LANE.stop_v + j] = 0.0, 0.0
-    L[LANE.tangents + j] = 0.0
+    L[LANE.tangents + j], L[LANE.need + j] = 0.0, 0.0  # (an idle second group is not committed)
     L[LANE.multi + j], L[LANE.mode + j] = 1.0, 0.0
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = 0.0, 1.0, 1.0
     for r in range(LANE.mxx, LANE.mec + LANES, LANES):

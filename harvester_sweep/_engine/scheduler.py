@@ -87,7 +87,8 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
             n_carriers, relist = lanes.carriers(L, n_lanes, carriers), False
         if n_carriers > 0:
             lanes.keep_starts(L, carriers, n_carriers)
-        marked, quarters = lanes.lane_steps(L, groups, it)
+        marked, quarters = (lanes.lane_steps(L, it) if groups > 1
+                            else lanes.first_group_steps(L, it))
         if n_carriers > 0:
             lanes.carry_tangents(L, carriers, n_carriers, it)
         if marked == 0:
