@@ -142,7 +142,6 @@ def rest_states(points) -> np.ndarray:
 def _preloaded_rest(p: dict) -> tuple:
     """x_0 [m] and the stop's x_s0 [m] at rest of point ``p``, whose stop is preloaded
     (:func:`initial_state`)."""
-    xs0 = 0.0
     k = p["mass"] * (2.0 * math.pi * p["natural_frequency"]) ** 2
     kh, g, ks = p["hertz_stiffness"], p["gap"], p["stop_support_stiffness"]
     if ks is not None:
@@ -162,7 +161,7 @@ def _preloaded_rest(p: dict) -> tuple:
             high = x0
         else:
             low = x0
-    return x0, xs0
+    return x0, 0.0
 
 
 def _preloaded(p: dict) -> bool:

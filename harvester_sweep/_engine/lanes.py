@@ -360,9 +360,9 @@ def lane_steps(L, it):
     scalar code once the trial step got short. A second loop commits: lanes whose step
     needs more (a contact switch, graded sub-steps near a touch or a separation, an
     extremum to place, a force peak, the end of a period) are marked in LANE.need and left
-    for :func:`finish_step`. It commits both groups in one loop, in the contact form if
+    for :func:`finish_step`. Both groups are committed in one loop, in the contact form if
     either has a lane in contact (a lane out of contact commits the same bits either
-    way): a loop for each group, each in its own form, compiled to slower code
+    way), because one loop for each group, each in its own form, compiled to slower code
     (benchmarks/results/commit_groups_47.md). Returns the number of lanes with a point
     marked, and how many of them take quarter steps (see quarter_steps).
     """
