@@ -1,7 +1,7 @@
 """The speed benchmark's one table: every figure of test_speed.py, ratios taken in this run.
 
     python -m pytest benchmarks/test_speed.py              # about 2 minutes
-    python -m pytest benchmarks/test_speed.py --million    # and the 1e6-point sweep (~20 min)
+    python -m pytest benchmarks/test_speed.py --million    # and the 1e6-point sweep (several minutes)
 
 The tests put their figures in ``FIGURES``; at the end of the session the table is printed
 and written to ``benchmarks/results/speed.md`` (when every benchmark ran).
@@ -27,7 +27,7 @@ FLOPS_PER_STEP = 100  # one RK4 step of this system, counted by hand (4 stages +
 
 def pytest_addoption(parser):
     parser.addoption("--million", action="store_true",
-                     help="also run the one-million-point 4-D sweep (about 20 minutes)")
+                     help="also run the one-million-point 4-D sweep (several minutes)")
 
 
 def pytest_collection_modifyitems(items):
@@ -141,7 +141,7 @@ def _table(f: dict) -> str:
                     f"(examples/million_points.toml, automatic step; run {when}"
                     f") | {f['million_wall'] / 60:.1f} min | peak memory "
                     f"{f['million_rss'] / 2**30:.2f} GiB; {f['million_settled']} settled |")
-    else:  # (about 20 minutes, so not every run: the last measured, with its run)
+    else:  # (several minutes, so not every run: the last measured, with its run)
         old = RESULT.read_text().splitlines() if RESULT.exists() else []
         rows += [line for line in old if line.startswith("| 1e6-point")]
     return "\n".join(rows) + "\n"

@@ -232,7 +232,7 @@ def test_one_point_sweep_in_a_new_process(benchmark, figures, tmp_path):
 
 def test_million_points(benchmark, figures, tmp_path, request):
     if not request.config.getoption("--million"):
-        pytest.skip("the 1e6-point sweep takes about 20 minutes: pass --million")
+        pytest.skip("the 1e6-point sweep takes several minutes: pass --million")
     import xarray as xr
 
     output = tmp_path / "million.nc"
