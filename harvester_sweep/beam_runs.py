@@ -126,9 +126,16 @@ def point_outputs(p: dict, bs: BeamSystem, row: np.ndarray) -> dict:
         "orbit_period": row[HEAD.period], "status": row[HEAD.status],
         "periods_run": row[HEAD.periods_run],
     }
-    modal = [max(abs(hi[f"eta_{r}"]), abs(lo[f"eta_{r}"]))
-             for r in range(1, len(bs.modes.omega) + 1)]
-    return out, np.array(modal)
+    modal = np.array([max(abs(hi[f"eta_{r}"]), abs(lo[f"eta_{r}"]))
+                      for r in range(1, len(bs.modes.omega) + 1)])
+    if row[HEAD.status] == _DIVERGED:  # (its row holds what the run booked before it blew up)
+        out.update({name: math.nan for name in out if name not in _COUNTED})
+        modal[:] = math.nan
+    return out, modal
+
+
+#: The outputs a diverged point still reports: how its run ended, not what it measured.
+_COUNTED = ("orbit_period", "status", "periods_run")
 
 
 def _change(a: dict, b: dict) -> float:

@@ -274,6 +274,19 @@ def test_a_graze_found_again_at_its_separation_does_not_stop_time():
     assert np.isfinite(v["power"][0]) and np.isfinite(sol.ends[0]).all()
 
 
+def test_a_diverged_point_reports_no_values():
+    """A contact sub-step of 1 s cannot resolve the contact: the run diverges, and every
+    value the point would report is NaN (the engine's row holds what it booked before the
+    run blew up: a power of 0 W, an x_max of -inf m); its status and periods run remain."""
+    p = resolve_beam_parameters("bimorph_tip", n_modes=1, contact_step=1.0, frequency=220.0)
+    v = solve_beam([p]).values
+    assert v["status"][0] == STATUS.diverged and v["periods_run"][0] > 0
+    told = {"orbit_period", "status", "periods_run", "steps_per_period", "contact_step",
+            "floquet_multipliers_imag"}
+    for name in set(v) - told:
+        assert np.isnan(v[name][0]).all(), name
+
+
 def test_a_state_deep_in_a_stop_is_flagged_diverged_not_run_forever():
     """A state twenty thousand gaps into the stop (a Newton iterate of the beam's solver
     was 1 mm deep at 1.4 m/s), far deeper than the contact sub-step resolves: RK4 in contact
