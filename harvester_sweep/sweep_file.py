@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .outputs import ENGINE_METRICS
+from .outputs import OUTPUTS as OUTPUT_VARIABLES
 from .parameters import (
     DEFAULT_PRESET,
     PARAMETERS,
@@ -480,6 +481,10 @@ def axis(name: str, entry, fixed: dict, registry=PARAMETERS) -> tuple[np.ndarray
                              f"{parameter.range_text()}); set it in [parameters]")
     if name in fixed:
         raise ParameterError(f"{key}: {name} is also set in [parameters]; give it in one place")
+    if name in OUTPUT_VARIABLES:  # (a dataset variable of that name holds each point's own)
+        raise ParameterError(f"{key}: {name} is also an output (each point's own, refined where "
+                             "its error estimate asks), so it cannot be a grid axis: run one "
+                             "sweep for each value")
     if isinstance(entry, dict):
         values, spacing = _range(key, entry), entry.get("scale", "linear")
         return _checked_range(parameter, values), spacing

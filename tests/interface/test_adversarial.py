@@ -206,6 +206,18 @@ def test_a_two_dimensional_array_as_an_axis_is_refused_not_flattened():
     assert load_sweep(spec({"frequency": np.array([200.0, 210.0])})).n_points == 2
 
 
+@pytest.mark.parametrize("model, name, values", [("tip_mass", "steps_per_period", [512, 1024]),
+                                                  ("beam", "contact_step", [1e-6, 2e-6])])
+def test_an_axis_that_is_also_an_output_is_refused_before_any_work(model, name, values):
+    """Each point's steps_per_period (and the beam's contact_step) is an output, refined
+    where its estimate asks: a grid axis of that name was accepted, every point solved, and
+    then the dataset could not be made (its variable and its coordinate clash), nor on a
+    resume."""
+    source = {"model": model, "grid": {name: values, "frequency": [220.0]}}
+    with pytest.raises(ParameterError, match=f"grid.{name}: {name} is also an output"):
+        load_sweep(source, model=model)
+
+
 @pytest.mark.parametrize("name", ["x.txt", "x.nc.bak", "x"])
 def test_run_sweep_refuses_an_output_that_is_not_nc(name, tmp_path):
     with pytest.raises(ParameterError, match=r"must end in \.nc"):

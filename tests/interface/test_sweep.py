@@ -270,7 +270,7 @@ BAD = [
     ({"grid": {"damping_ratio": [0.01, -0.1]}}, "grid.damping_ratio [-] = -0.1"),
     ({"grid": {"frequency": [140.0, math.nan]}}, "grid.frequency [Hz] = nan"),
     ({"grid": {"frequency": [140.0, "fast"]}}, "grid.frequency [Hz] = 'fast' is not a number"),
-    ({"grid": {"steps_per_period": [256, 300.5]}}, "grid.steps_per_period [-] = 300.5"),
+    ({"grid": {"max_periods": [256, 300.5]}}, "grid.max_periods [-] = 300.5"),
     ({"grid": {"frequency": [20.0, 140.0]}, "parameters": {"steps_per_period": 64}},
      "at the grid point frequency = 20"),
     ({"grid": {"gap": [1e-6]}, "parameters": {"gap": 2e-6}}, "grid.gap: gap is also set"),
