@@ -48,6 +48,7 @@ from .parameters import (
     DEFAULT_PRESET,
     PRESET_NOTES,
     ParameterError,
+    check_seed,
     is_number,
     resolve_parameters,
 )
@@ -323,9 +324,7 @@ def check_draws(samples, seed, box, shock):
             or not 1 <= samples <= MAX_SAMPLES:
         raise ParameterError(f"samples [-] = {samples!r}: must be an integer in 1 .. "
                              f"{MAX_SAMPLES:,}")
-    if not (is_number(seed) and isinstance(seed, numbers.Integral)) or seed < 0:
-        raise ParameterError(f"seed [-] = {seed!r}: must be an integer >= 0")
-    samples, seed = int(samples), int(seed)
+    samples, seed = int(samples), check_seed(seed)
     if shock is not None:
         if box is not None:
             raise ParameterError("box and shock: give one, the starts are drawn from a box "

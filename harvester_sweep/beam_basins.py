@@ -23,7 +23,7 @@ from .beam_packing import first_steps, pack_beam
 from .beam_parameters import DEFAULT_BEAM_PRESET, resolve_beam_parameters
 from .beam_runs import solve_beam, system_of
 from .outputs import OUTPUTS
-from .parameters import ParameterError
+from .parameters import ParameterError, check_seed
 from .version import __version__
 
 #: Two orbits are one attractor where their strobes agree within this fraction of each
@@ -44,6 +44,7 @@ def beam_basins(preset: str | None = DEFAULT_BEAM_PRESET, samples: int = 64, see
         raise ParameterError(f"samples [-] = {samples!r}: must be an integer >= 1")
     if not (isinstance(box, (int, float)) and math.isfinite(box) and box > 0):
         raise ParameterError(f"box [-] = {box!r}: must be a finite number > 0")
+    seed = check_seed(seed)
     p = resolve_beam_parameters(preset, **overrides)
     bs = system_of(p)
     steps, sub = first_steps(p, bs)

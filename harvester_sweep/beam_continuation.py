@@ -181,6 +181,10 @@ def check_branch(parameter: str, start: float, stop: float, step: float,
         raise ParameterError(f"parameter {parameter!r}: must be a real beam parameter")
     for value in (start, stop):
         BEAM_PARAMETERS[parameter].check(value)
+    if stop == start:
+        unit = BEAM_PARAMETERS[parameter].unit
+        raise ParameterError(f"stop [{unit}] = {stop!r}: must differ from start, the branch's "
+                             "direction")
     if not (isinstance(step, float) and 0 < step <= 0.2):
         raise ParameterError(f"step [-] = {step!r}: must be a number in (0, 0.2]")
     if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:

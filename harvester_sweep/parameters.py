@@ -119,6 +119,18 @@ def is_number(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
+#: The largest seed of a basin map's draws: a netCDF attribute holds it as a 64-bit integer.
+MAX_SEED = 2**63 - 1
+
+
+def check_seed(seed) -> int:
+    """A seed of numpy's default generator, checked (ParameterError in one line)."""
+    # (numpy's integers are integers: is_number refuses bools, numbers.Integral floats)
+    if not (is_number(seed) and isinstance(seed, numbers.Integral)) or not 0 <= seed <= MAX_SEED:
+        raise ParameterError(f"seed [-] = {value_text(seed)}: must be an integer in 0 .. 2^63 - 1")
+    return int(seed)
+
+
 def value_text(value) -> str:
     """repr(value) for a message, or a description where Python refuses to print it."""
     try:

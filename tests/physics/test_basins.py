@@ -130,6 +130,7 @@ def test_a_map_holds_each_points_basins_whatever_the_engine_calls(monkeypatch):
     ({"samples": 0}, "samples [-] = 0"),
     ({"samples": 2.5}, "samples [-] = 2.5"),
     ({"seed": -1}, "seed [-] = -1"),
+    ({"seed": 2**64}, "seed [-] = 18446744073709551616"),  # (its netCDF attribute failed)
     ({"box": {"x": -1e-6}}, "box.x [m] = -1e-06"),
     ({"box": {"y": 1e-6}}, "box.y: unknown"),
     ({"gap": "wide"}, "gap"),

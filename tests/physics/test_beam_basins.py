@@ -44,3 +44,11 @@ def test_the_band_has_the_up_and_the_down_sweeps_orbits_as_attractors():
 def test_bad_basin_options_are_refused(samples, box):
     with pytest.raises(ParameterError, match="samples|box"):
         beam_basins("bimorph_tip", samples=samples, box=box, n_modes=1)
+
+
+@pytest.mark.parametrize("seed", [-1, 2**64, 1.5])
+def test_a_bad_seed_is_refused_in_one_line(seed):
+    """numpy's generator raised on a negative seed, and a seed of 2^64 or more was drawn
+    from and then failed as the dataset's netCDF attribute, after the solves."""
+    with pytest.raises(ParameterError, match=r"seed \[-\] = .*: must be an integer in 0"):
+        beam_basins("bimorph_tip", samples=2, seed=seed, n_modes=1)

@@ -81,6 +81,7 @@ def test_branch_points_meet_the_accuracy_and_are_within_twice_their_estimates(br
     (dict(step=0.5), "step"),
     (dict(max_points=1), "max_points"),
     (dict(start=-1.0), "frequency"),
+    (dict(stop=140.0), r"stop \[Hz\] = 140.0: must differ from start"),  # (it divided by 0)
 ])
 def test_bad_branch_options_are_refused(kwargs, words):
     options = dict(parameter="frequency", start=140.0, stop=150.0) | kwargs
