@@ -51,6 +51,10 @@ def lock_output(output) -> FileLock:
     try:
         lock.acquire()
     except Timeout:
+        if not Path(lock.lock_file).exists():  # (filelock times out where it cannot create it)
+            raise StoreError(f"{output}: cannot write in the folder {output.parent} (no lock "
+                             "file can be made there): give an --output where you can "
+                             "write") from None
         raise ParameterError(
             f"{output}: another run is writing this output now (it holds "
             f"{lock.lock_file}): wait for it to end, or give another --output") from None

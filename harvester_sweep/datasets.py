@@ -98,6 +98,7 @@ def sweep_dataset(spec, chunks: list) -> xr.Dataset:
               **grid_coordinates(spec.grid, spec.spacing)}
     if spec.continuation:
         coords["direction"] = ("direction", list(spec.directions), {
+            "units": "1",
             "long_name": "direction of the frequency continuation: each point starts from the "
                          "final state of the previous frequency (up: increasing)"})
     if spec.samples:

@@ -251,6 +251,14 @@ def _analysis(command, tmp_path, monkeypatch):
     return toml
 
 
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+def test_a_folder_where_no_file_can_be_made_is_not_taken_for_another_run():
+    """/proc takes no new file, not even root's: filelock times out there rather than
+    raise, which read as another run holding the output's lock."""
+    with pytest.raises(chunk_store.StoreError, match="cannot write in the folder /proc"):
+        chunk_store.lock_output("/proc/x.nc")
+
+
 @pytest.mark.parametrize("command", ["continue", "basins"])
 def test_a_second_run_on_the_same_output_is_refused_before_the_work(command, tmp_path, capsys,
                                                                      monkeypatch):
