@@ -267,14 +267,18 @@ def write_failure(path, error: OSError, size: int | None = None) -> str:
     """Why ``path`` could not be written, in words: the system's reason, or, where the
     library gives none (netCDF4 reports every refusal of HDF5, a full disk included, as
     "NetCDF: HDF error"), its text with the free space on the disk against the ``size``
-    [bytes] of the data."""
-    if error.strerror:
-        return error.strerror
-    text = str(error) or type(error).__name__
+    [bytes] of the data. A reason given beside a disk too full for the data says so too:
+    HDF5 on a full disk has also reported "Permission denied"."""
+    reason = error.strerror
+    text = reason or str(error) or type(error).__name__
     try:
         free = shutil.disk_usage(Path(path).parent).free
     except OSError:
         return text
+    if reason:
+        if size is None or free >= size:
+            return reason
+        return f"{reason} (the disk is full: {_bytes(free)} free for about {_bytes(size)} of data)"
     if size is None:
         return f"{text} (no cause given; {_bytes(free)} free on the disk)"
     full = "the disk is full: " if free < size else ""

@@ -230,6 +230,15 @@ def test_the_system_reason_is_kept_where_it_is_given(tmp_path):
     assert chunk_store.write_failure(tmp_path / "x.nc", error, 10) == os.strerror(errno.EACCES)
 
 
+def test_a_reason_given_beside_a_full_disk_names_the_free_space(tmp_path, monkeypatch):
+    """HDF5 writing to a full tmpfs raised "Permission denied" in a folder it could write."""
+    monkeypatch.setattr(chunk_store.shutil, "disk_usage",
+                        lambda path: type("usage", (), {"free": 0})())
+    error = OSError(errno.EACCES, os.strerror(errno.EACCES))
+    assert chunk_store.write_failure(tmp_path / "x.nc", error, 10) == (
+        f"{os.strerror(errno.EACCES)} (the disk is full: 0 B free for about 10 B of data)")
+
+
 # -- 3: 'continue' and 'basins' take the output's lock and check its folder first --------
 
 CONTINUATION = "[continuation]\nstart = 150.0\nstop = 160.0\n"
