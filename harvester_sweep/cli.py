@@ -27,8 +27,16 @@ EXIT_DIVERGED = 3
 EXIT_INTERRUPTED = 130  # the shell's code for a run stopped by Ctrl-C (128 + SIGINT)
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse's parser whose usage errors are one line, as every bad input's is (exit 2),
+    naming the command's --help rather than printing its usage."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _OneLineParser(
         prog="harvester-sweep",
         description="Steady states of a piezoelectric cantilever harvester striking a Hertz bump "
         "stop (SI units throughout).",

@@ -566,6 +566,9 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
         if not is_number(value) or not 0 < value <= high:  # (numpy's numbers too)
             raise ParameterError(f"{prefix}{name} [-] = {value!r}: must be a number in "
                                  f"(0, {high:g}] (relative to |stop - start|)")
+    if min_step > max_step:
+        raise ParameterError(f"{prefix}min_step [-] = {min_step!r}: must not exceed max_step = "
+                             f"{max_step!r}")
     if not min_step <= step <= max_step:
         raise ParameterError(f"{prefix}step [-] = {step!r}: must lie in [min_step, max_step] = "
                              f"[{min_step!r}, {max_step!r}]")

@@ -51,6 +51,20 @@ def test_output_netcdf_and_plot(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
+    (["scene", "--preset", "foo"], "invalid choice: 'foo'"),
+    (["run", "sweep.toml"], "required: --output"),
+    (["nosuch"], "invalid choice: 'nosuch'"),
+])
+def test_usage_errors_exit_2_with_one_line_naming_the_help(argv, words, capsys):
+    """argparse printed its usage block above the error: three to four lines."""
+    with pytest.raises(SystemExit) as exited:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exited.value.code == 2 and words in err and "--help" in err
+    assert err.count("\n") == 1 and "usage:" not in err
+
+
+@pytest.mark.parametrize("argv, words", [
     (["scene", "--set", "mass=-1"], "mass [kg]"),
     (["scene", "--set", "restitution=0"], "restitution [-]"),
     (["scene", "--set", "gap=inf"], "gap [m]"),
@@ -147,6 +161,8 @@ def test_continue_writes_the_branch_lists_its_bifurcations_and_plots_it(tmp_path
     ("start = 300.0\nstop = -1.0", ["continuation.stop", "frequency", "Hz"]),
     ("start = 300.0\nstop = 240.0\nbudget = 3", ["continuation.budget", "unknown"]),
     ('start = 300.0\nstop = 240.0\nperiod_doubling = "follow"', ["period_doubling"]),
+    ("start = 300.0\nstop = 240.0\nmin_step = 0.1\nmax_step = 0.01",  # (read backwards)
+     ["continuation.min_step [-] = 0.1: must not exceed max_step = 0.01"]),
 ])
 def test_bad_continuation_files_exit_2_with_one_line(tmp_path, table, words, capsys):
     _refused_in_one_line("continue", f"[continuation]\n{table}", words, tmp_path, capsys)
