@@ -416,7 +416,7 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
         values["contact_step"][i] = sub / 2 ** lv_k
         values["spectral_radius"][i] = abs(mult[k][0]) if k in mult else np.nan
         modal[i], ends[i], strobes[i] = amp, end, strobe
-        multipliers[i] = mult.get(k, np.full(len(end), np.nan))
+        multipliers[i] = mult.get(k, np.full(len(end), complex(math.nan, math.nan)))
 
 
 def _newton_at_level(g, packs, todo, start, per, chord, jac) -> Newton:

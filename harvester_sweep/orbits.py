@@ -479,9 +479,9 @@ def _linear_amplitude(rows):
 
 def _multipliers(pts: _Points) -> np.ndarray:
     """The Floquet multipliers (n, D) of the solved points ``pts`` [-], largest modulus
-    first; NaN where a point did not settle."""
+    first; NaN, real and imaginary parts, where a point did not settle."""
     settled = pts.counts[:, _COUNT.status] == STATUS.settled
-    multipliers = np.full((len(pts.rows), pts.components.shape[2]), np.nan + 0j)
+    multipliers = np.full((len(pts.rows), pts.components.shape[2]), complex(np.nan, np.nan))
     if settled.any():
         multipliers[settled] = sorted_multipliers(
             pts.jacobians[settled, _JACOBIANS.jacobian])

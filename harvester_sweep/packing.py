@@ -182,9 +182,14 @@ def refusal(p: dict) -> str | None:
     if not _too_stiff(steps, p["max_steps_per_period"]):
         return None
     rate, what = timescales.time_scales(p).fastest()
+    seconds = timescales.run_time_estimate(steps)
+
+    def whole(value):  # (a whole number, but not one of 150 digits)
+        return f"{value:.3g}" if value >= 1e12 else f"{value:.0f}"
+
     return (f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
-            f"{1 / (p['frequency'] * steps):.3g} s, {steps} steps per period, about "
-            f"{timescales.run_time_estimate(steps):.0f} s per point; raise "
+            f"{1 / (p['frequency'] * steps):.3g} s, {whole(steps)} steps per period, about "
+            f"{whole(seconds)} s per point; raise "
             f"max_steps_per_period [-] (now {p['max_steps_per_period']}) to run it anyway")
 
 

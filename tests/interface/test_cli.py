@@ -88,6 +88,8 @@ def test_divergence_is_reported_not_printed_as_numbers(capsys):
     metrics = json.loads(captured.out)
     assert metrics["status"] == "diverged" and metrics["converged"] is False
     assert metrics["power"] is None and metrics["v_peak"] is None
+    assert set(metrics["floquet_multipliers_real"] + metrics["floquet_multipliers_imag"]) \
+        == {None}  # (the imaginary parts were 0)
     assert "diverged" in captured.err and "steps_per_period" in captured.err
 
 

@@ -71,6 +71,13 @@ def test_explicit_step_beyond_contact_bound_warns():
         resolve_parameters("paper", hertz_stiffness=9.03e11, steps_per_period=512)
 
 
+def test_an_absurd_stiffness_is_refused_in_a_readable_line():
+    """A tip mass of 1e-300 kg asks 6e145 steps per period: the line printed that count and
+    its time in seconds in full, 150 digits each."""
+    with pytest.raises(TooStiffError, match=r"6.37e\+145 steps per period, about \S+e\+\d+ s"):
+        run_scene("paper", mass=1e-300)
+
+
 def test_too_stiff_is_refused_with_step_and_time():
     """Resolved (its step chosen), then refused by packing before any integration."""
     p = resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
