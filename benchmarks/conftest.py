@@ -1,7 +1,7 @@
 """The speed benchmark's one table: every figure of test_speed.py, ratios taken in this run.
 
     python -m pytest benchmarks/test_speed.py              # about 2 minutes
-    python -m pytest benchmarks/test_speed.py --million    # and the 1e6-point sweep (several minutes)
+    python -m pytest benchmarks/test_speed.py --million    # and the 1e6-point sweep (minutes)
 
 The tests put their figures in ``FIGURES``; at the end of the session the table is printed
 and written to ``benchmarks/results/speed.md`` (when every benchmark ran).

@@ -74,7 +74,8 @@ def test_explicit_step_beyond_contact_bound_warns():
 def test_an_absurd_stiffness_is_refused_in_a_readable_line():
     """A tip mass of 1e-300 kg asks 6e145 steps per period: the line printed that count and
     its time in seconds in full, 150 digits each."""
-    with pytest.raises(TooStiffError, match=r"6.37e\+145 steps per period, about \S+e\+\d+ s"):
+    with pytest.raises(TooStiffError,
+                       match=r" \d\.\d+e\+\d+ steps per period, about \d\.\d+e\+\d+ s "):
         run_scene("paper", mass=1e-300)
 
 
