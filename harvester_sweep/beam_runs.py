@@ -791,25 +791,29 @@ def _attributes(ds: xr.Dataset, p: dict, preset: str) -> xr.Dataset:
 def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
                **overrides) -> tuple[dict, xr.Dataset]:
     """One beam point to steady state, then ``periods`` forcing periods of its orbit
-    recorded at every grid step, contact sub-step and switch: (its outputs, a CF dataset
-    of the time history: time [s], tip and contact displacement [m], voltage [V], power
-    [W], contact force [N], root strain [-], rod face [m]; with the outputs, the preset
-    and the parameters, as ``beam-scene --out`` writes it)."""
+    recorded at every grid step, contact sub-step and switch (none where it diverged):
+    (its outputs, a CF dataset of the time history: time [s], tip and contact
+    displacement [m], voltage [V], power [W], contact force [N], root strain [-], rod face
+    [m]; with the outputs, the preset and the parameters, as ``beam-scene --output``
+    writes it)."""
     p = resolve_beam_parameters(preset, **overrides)
     sol = solve_beam([p])
     bs = system_of(p)
     steps = int(sol.values["steps_per_period"][0])
     pk = pack_beam(p, bs, steps, float(sol.values["contact_step"][0]))
+    S = len(bs.system.surfaces)
+    names = bs.system.output_names
     rows = periods * (steps + 4096) + 16  # (grown until the record fits: never cut short)
     while True:
+        if sol.values["status"][0] == _DIVERGED:  # (no orbit: nothing to record)
+            rec = np.empty((0, 1 + S + len(names)))
+            break
         rec = modal_map.record_motion(pk, sol.ends[0], periods, rows)
         if len(rec) < rows:
             break
         rows *= 4
-    S = len(bs.system.surfaces)
-    names = bs.system.output_names
     col = {name: 1 + S + k for k, name in enumerate(names)}
-    t = rec[:, 0] - rec[0, 0]
+    t = rec[:, 0] - rec[:1, 0].sum()  # (from the orbit's start; empty if none)
     series = xr.Dataset(
         {"tip_displacement": ("time", rec[:, col["tip_displacement"]],
                               {"units": "m", "long_name": "tip displacement relative to the "

@@ -178,19 +178,27 @@ def _too_stiff(steps, most):
 
 def refusal(p: dict) -> str | None:
     """Why point ``p`` is refused before integration (too stiff), or None."""
-    steps = p["steps_per_period"]
-    if not _too_stiff(steps, p["max_steps_per_period"]):
+    steps, most = p["steps_per_period"], p["max_steps_per_period"]
+    if not _too_stiff(steps, most):
         return None
+    seconds = f"about {_readable(timescales.run_time_estimate(steps))} s per point"
+    remedy = f"raise max_steps_per_period [-] (now {most}) to run it anyway"
+    if not automatic_step(p):  # (the step was asked for, not chosen for the stiffness)
+        return (f"too stiff: steps_per_period [-] asks {_readable(steps)} steps per period, "
+                f"above max_steps_per_period, {seconds}; {remedy}")
     rate, what = timescales.time_scales(p).fastest()
-    seconds = timescales.run_time_estimate(steps)
+    return (f"too stiff: {what}, at {rate:.3g} 1/s, needs a step <= "
+            f"{1 / (p['frequency'] * steps):.3g} s, {_readable(steps)} steps per period, "
+            f"{seconds}; {remedy}")
 
-    def whole(value):  # (a whole number, but not one of 150 digits)
-        return f"{value:.3g}" if value >= 1e12 else f"{value:.0f}"
 
-    return (f"too stiff: {what} (rate {rate:.3g} 1/s) needs a step <= "
-            f"{1 / (p['frequency'] * steps):.3g} s, {whole(steps)} steps per period, about "
-            f"{whole(seconds)} s per point; raise "
-            f"max_steps_per_period [-] (now {p['max_steps_per_period']}) to run it anyway")
+def _readable(value: float) -> str:
+    """``value`` in a few digits: a whole number from 10 up, two significant figures below
+    (a refused point's time can be a millisecond), an exponent from 1e12 (a count of 150
+    digits is unreadable)."""
+    if value >= 1e12:
+        return f"{value:.3g}"
+    return f"{value:.0f}" if value >= 10 else f"{value:.2g}"
 
 
 def check_runnable(p: dict) -> None:

@@ -1,6 +1,7 @@
 """Bad input fails before any integration, naming the parameter, its unit and its range."""
 
 import math
+import re
 
 import pytest
 from hypothesis import given, settings
@@ -12,8 +13,10 @@ from harvester_sweep import (
     TooStiffError,
     resolve_parameters,
     run_scene,
+    timescales,
 )
 from harvester_sweep.materials import MATERIALS, hertz_stiffness_from_bodies
+from harvester_sweep.packing import check_runnable, refusal
 from harvester_sweep.parameters import StabilityWarning
 
 FLOATS = [name for name, spec in PARAMETERS.items() if spec.kind == "float"]
@@ -84,8 +87,25 @@ def test_too_stiff_is_refused_with_step_and_time():
     p = resolve_parameters("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
     assert p["steps_per_period"] > 100_000
     with pytest.raises(TooStiffError, match=r"too stiff: .* needs a step <= .* s, \d+ steps "
-                       r"per period, about \d+ s per point"):
+                       r"per period, about [\d.]+ s per point"):
         run_scene("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
+
+
+def test_a_refusal_says_a_short_time_and_which_step_it_refuses():
+    """A point refused at a low max_steps_per_period said "about 0 s per point" (its time
+    rounded to whole seconds); a step asked for above max_steps_per_period was refused in
+    words about the contact damping, which had not set it."""
+    low = resolve_parameters("paper", max_steps_per_period=16)
+    said = float(re.search(r"about ([\d.e+-]+) s per point", refusal(low)).group(1))
+    assert said == pytest.approx(timescales.run_time_estimate(low["steps_per_period"]),
+                                 rel=0.05)
+    assert said > 0
+    asked = resolve_parameters("paper", steps_per_period=5000, max_steps_per_period=2000)
+    with pytest.raises(TooStiffError, match=r"^too stiff: steps_per_period \[-\] asks 5000 "
+                       r"steps per period, above max_steps_per_period, about [\d.]+ s per "
+                       r"point; raise max_steps_per_period \[-\] \(now 2000\)"):
+        check_runnable(asked)
+    assert "contact damping" not in refusal(asked)
 
 
 def test_paper_preset_states_its_assumptions():

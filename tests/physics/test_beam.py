@@ -5,6 +5,7 @@ modal phasor sum without contact, the tip-mass model for one mode at the tip, an
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ from harvester_sweep import rod as rd
 from harvester_sweep._engine import STATUS
 from harvester_sweep.beam_packing import first_steps, pack_beam
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
-from harvester_sweep.beam_runs import solve_beam, system_of
+from harvester_sweep.beam_runs import beam_scene, solve_beam, system_of
 from harvester_sweep.models import beam as beam_model
 
 
@@ -285,6 +286,20 @@ def test_a_diverged_point_reports_no_values():
     told = {"orbit_period", "status", "periods_run", "steps_per_period", "contact_step"}
     for name in set(v) - told:
         assert np.isnan(v[name][0]).all(), name
+
+
+@pytest.mark.parametrize("preset, overrides", [
+    ("bimorph_tip", {"n_modes": 1, "contact_step": 1.0, "frequency": 220.0}),
+    ("mak_rod", {"rod_length": 1e-6})])  # (rod modes of 1e10 rad/s for a step of 3e-8 s)
+def test_a_diverged_scene_records_no_time_history(preset, overrides):
+    """A diverged point has no orbit to record: its scene's time history is empty, where
+    the orbit's periods were recorded from the blown-up state and squaring its voltage
+    overflowed (numpy's warning reached the command line's stderr)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        outputs, series = beam_scene(preset, **overrides)
+    assert outputs["status"] == STATUS.diverged
+    assert series.sizes["time"] == 0 and np.isnan(float(series["power"]))
 
 
 def test_a_state_deep_in_a_stop_is_flagged_diverged_not_run_forever():
