@@ -101,6 +101,9 @@ class Sample:
         The cost of a point before it is solved: its parameters resolved and packed [s].
     seconds : float
         What the sample and the rate's runs took [s].
+    cut_short : str
+        How many of the sample's points ran past the periods the sample gives a point and
+        were counted at their whole budget, and those periods ("" for none).
     """
 
     head_steps: float
@@ -113,6 +116,7 @@ class Sample:
     round_seconds: float
     setup_seconds: float
     seconds: float
+    cut_short: str = ""
 
     def point_seconds(self, steps: float, rounds: float, threads: int) -> float:
         """The time [s] a point of ``steps`` RK4 steps in ``rounds`` rounds adds to its
@@ -139,6 +143,8 @@ class RunEstimate:
         Expected wall time [s].
     starts : int
         Runs from a start of their own at each point (a basin map's samples), 1 for a sweep.
+    cut_short : str
+        How many sampled points were counted at their whole budget (Sample.cut_short).
     """
 
     points: int
@@ -147,6 +153,7 @@ class RunEstimate:
     threads: int
     seconds: float
     starts: int = 1
+    cut_short: str = ""
 
     @property
     def long(self) -> bool:
@@ -160,10 +167,11 @@ class RunEstimate:
         size = f"{self.points:,} point{'s' if self.points != 1 else ''}{starts}{todo}"
         if math.isnan(self.seconds):
             return size
+        counted = f" ({self.cut_short})" if self.cut_short else ""
         return (f"{size}, "
                 f"about {self.steps:.2g} RK4 steps: roughly "
                 f"{duration(self.seconds)} on {self.threads} thread"
-                f"{'s' if self.threads > 1 else ''}")
+                f"{'s' if self.threads > 1 else ''}{counted}")
 
 
 def sweep_estimate(spec, remaining: int, threads: int) -> RunEstimate:
@@ -221,7 +229,7 @@ def estimate_basins(spec, threads: int, starts_per_call: int) -> RunEstimate:
                   sample.head_steps, sample.head_rounds, sample.head_max_rounds, sample,
                   threads)
     return RunEstimate(spec.n_points, spec.n_points, work.steps, threads, work.seconds,
-                       spec.samples)
+                       spec.samples, sample.cut_short)
 
 
 def _timed(points, remaining, lines, per_chunk, line_steps, line_rounds, chunk_rounds,
@@ -240,7 +248,7 @@ def _timed(points, remaining, lines, per_chunk, line_steps, line_rounds, chunk_r
     seconds = (chunks * chunk_rounds * sample.round_seconds
                + lines * sample.point_seconds(line_steps, line_rounds, call_threads))
     return RunEstimate(points, remaining, lines * line_steps, threads,
-                       seconds / min(side_by_side, chunks))
+                       seconds / min(side_by_side, chunks), cut_short=sample.cut_short)
 
 
 def _sweep_sample(spec) -> Sample:
@@ -333,6 +341,11 @@ def _measure(packed, successors, estimated, setup: float) -> Sample:
         & (run >= rows[:, PARAM.max_periods]) \
         & (budget > rows[:, PARAM.max_periods])
     more = np.where(short, budget / np.maximum(run, 1.0), 1.0)
+    cut = int(short.sum())
+    cut_short = (f"{cut} of {len(short)} sampled points did not "
+                 f"settle within the sample's {rows[short, PARAM.max_periods].min():.0f} "
+                 f"period{'s' if rows[short, PARAM.max_periods].min() > 1 else ''} and "
+                 "are counted at their whole budget (max_periods)" if cut else "")
     rate, rating = _engine_rate(rows, orbits.finals, packed.refused)
     import numba
 
@@ -355,7 +368,7 @@ def _measure(packed, successors, estimated, setup: float) -> Sample:
     return Sample(mean(steps, heads), mean(rounds, heads),
                   float(rounds[heads & runs].max()) if (heads & runs).any() else 0.0,
                   mean(steps, ~heads), mean(rounds, ~heads), slowest, rate, round_seconds,
-                  setup, solving + rating + 2 * setup * len(packed))
+                  setup, solving + rating + 2 * setup * len(packed), cut_short)
 
 
 def _engine_rate(rows, states, refused) -> tuple[float, float]:

@@ -37,6 +37,7 @@ def test_a_grid_within_the_sample_is_counted_as_the_solver_runs_it():
         work = estimate(spec, spec.n_points, 1)
         ds = run_sweep(spec, progress=False)
         assert work.steps == pytest.approx(float(ds["rk4_steps"].sum()), rel=1e-12)
+        assert "did not settle" not in work.describe()
 
 
 def test_the_estimate_grows_with_the_points_and_shrinks_with_the_threads():
@@ -129,6 +130,9 @@ def test_a_small_grid_whose_budgets_could_be_long_is_sampled_and_refused(tmp_pat
            if "compiling" not in line]
     assert len(err) == 1 and err[0].startswith("harvester-sweep: error: 2 points, about")
     assert "--yes" in err[0]
+    # (and why: the sample gave each point one period, which did not settle it)
+    assert ("(2 of 2 sampled points did not settle within the sample's 1 period and are "
+            "counted at their whole budget (max_periods))") in err[0]
 
 
 def test_the_estimate_changes_no_result():
