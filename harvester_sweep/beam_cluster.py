@@ -128,6 +128,8 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
     workers = check_cluster(workers, scheduler)
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
     with store:  # (holds the output's lock until the file is written)
+        if store.complete:
+            return store.finished_result(announce)
         finished = {chunk for chunk in store.present() if store.has(chunk)}
         todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]
         remaining = sum(chunk_points(spec, chunk) for chunk in todo)

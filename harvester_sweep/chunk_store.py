@@ -16,6 +16,7 @@ import io
 import json
 import os
 import shutil
+import sys
 import warnings
 from pathlib import Path
 
@@ -69,6 +70,7 @@ class MemoryStore:
 
     def __init__(self):
         self.chunks = {}
+        self.complete = False  # (nothing finished before the run: see ChunkStore)
 
     def __enter__(self):
         return self
@@ -108,8 +110,12 @@ class ChunkStore:
         if output.is_dir():
             raise ParameterError(f"{output} is a folder: give --output a file name")
         self.dir = output.with_name(output.name + ".partial")
+        self.output = output
         self.spec = spec
         self.digest = spec.digest()
+        #: the output already holds this sweep's finished result (a resume of a run that
+        #: ended): the driver returns it rather than run the sweep again
+        self.complete = False
         self._lock = lock_output(output)
         try:
             self._check_partial(resume)
@@ -119,6 +125,8 @@ class ChunkStore:
 
     def _check_partial(self, resume: bool) -> None:
         if not self.dir.exists():
+            if resume and self.output.exists():
+                self._check_finished()
             return
         if not resume:
             raise ParameterError(
@@ -136,6 +144,38 @@ class ChunkStore:
                 f"{self.dir} holds a partial result of another sweep (its grid, "
                 "parameters, options, package version, engine or solver differ): it cannot be "
                 "resumed with this one; delete it to start over")
+
+    def _check_finished(self) -> None:
+        """A resume with no partial result, of an output that exists: this sweep's
+        finished file is complete; any other file is refused, not run over (a resume run
+        once too often computed the whole sweep again, or replaced another sweep's file)."""
+        try:
+            import netCDF4
+
+            with netCDF4.Dataset(self.output) as nc:
+                digest = getattr(nc, "sweep_sha256", None)
+        except OSError:
+            digest = None
+        if digest == self.digest:
+            self.complete = True
+            return
+        whose = ("another sweep's finished result (its grid, parameters, options, package "
+                 "version, engine or solver differ)" if digest is not None
+                 else "no finished result of a sweep")
+        raise ParameterError(
+            f"{self.output} holds {whose} and there is no partial result "
+            f"{self.dir.name}/ to resume: run without --resume to replace it")
+
+    def finished_result(self, say: bool):
+        """The finished result the output holds (``complete``), as an xarray Dataset; said
+        on stderr when ``say``."""
+        import xarray as xr
+
+        if say:
+            print(f"harvester-sweep: {self.output} already holds this sweep's finished "
+                  "result: nothing to resume", file=sys.stderr, flush=True)
+        with xr.open_dataset(self.output) as ds:
+            return ds.load()
 
     def __enter__(self):
         return self
@@ -243,6 +283,8 @@ def write_result(store, ds, output) -> None:
     (StoreError)."""
     from .datasets import write_netcdf
 
+    # (the sweep it holds, that a resume of it knows it by: ChunkStore._check_finished)
+    ds.attrs.setdefault("sweep_sha256", store.digest)
     try:
         write_netcdf(ds, output)
     except OSError as error:

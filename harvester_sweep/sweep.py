@@ -90,6 +90,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         check_scheduler(scheduler)
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
     with store:  # (holds the output's lock until the file is written)
+        if store.complete:
+            return store.finished_result(progress)
         finished = [chunk for chunk in store.present() if store.has(chunk)]
         remaining = spec.n_points - sum(chunk_points(spec, chunk) for chunk in finished)
         announce(sweep_estimate(spec, remaining, _threads(workers, scheduler)), yes, progress,

@@ -141,6 +141,17 @@ def test_a_partial_result_is_resumed_by_the_same_sweep_only(tmp_path, monkeypatc
     assert (tmp_path / "part.nc.partial").exists()
 
 
+def test_a_resume_of_a_finished_beam_file_runs_nothing(whole, tmp_path, monkeypatch):
+    """As the tip-mass sweep's (test_sweep): the finished file is this sweep's result, known
+    by the sweep's digest it now holds; another sweep's resume is refused."""
+    out = tmp_path / "done.nc"
+    run_beam_file(SWEPT, out)
+    monkeypatch.setattr(beam_cluster, "beam_chunk", lambda *a, **k: pytest.fail("computed"))
+    assert_same_bits(run_beam_file(SWEPT, out, resume=True), whole)
+    with pytest.raises(ParameterError, match="another sweep's finished result"):
+        run_beam_file({**SWEPT, "parameters": {"n_modes": 2}}, out, resume=True)
+
+
 @pytest.fixture(scope="module")
 def scheduler():
     """An in-process cluster of one single-threaded worker: its address."""

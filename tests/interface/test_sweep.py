@@ -202,6 +202,30 @@ def test_a_partial_result_of_another_sweep_is_refused(tmp_path):
     assert partial.exists()
 
 
+def test_a_resume_of_a_finished_output_runs_nothing_and_replaces_no_other(tmp_path,
+                                                                          monkeypatch):
+    """A resume run once too often, after its sweep had finished, computed the whole sweep
+    again; a resume of another sweep's finished file replaced it. The first now returns
+    the file's result and computes nothing; the second, and a file that is no sweep's,
+    are refused and left as they are."""
+    sweep_dict = spec({"frequency": [140.0, 150.0]})
+    out = tmp_path / "done.nc"
+    whole = run_sweep(sweep_dict, out, progress=False)
+    written = out.read_bytes()
+    monkeypatch.setattr(sweep, "compute_chunk", lambda *a, **k: pytest.fail("computed"))
+    assert_same_bits(run_sweep(sweep_dict, out, resume=True, progress=False), whole)
+    other = spec({"frequency": [140.0, 160.0]})
+    with pytest.raises(ParameterError, match="another sweep's finished result .* run "
+                       "without --resume to replace it"):
+        run_sweep(other, out, resume=True, progress=False)
+    assert out.read_bytes() == written
+    stray = tmp_path / "stray.nc"
+    stray.write_text("not netCDF")
+    with pytest.raises(ParameterError, match="no finished result of a sweep"):
+        run_sweep(sweep_dict, stray, resume=True, progress=False)
+    assert stray.read_text() == "not netCDF"
+
+
 def test_a_partial_result_of_another_orbit_solver_is_refused(tmp_path, monkeypatch):
     """A development install changes the orbit solver without changing the version or the
     engine: chunks it solved are not mixed with the new solver's."""
