@@ -444,7 +444,8 @@ def _attractors(results, part: slice, rows: np.ndarray) -> dict:
     first = np.array([g[0] for g in groups], dtype=int)
     fraction = np.array([len(g) for g in groups], dtype=float) / samples
     impacts = metrics[first, METRIC.impacts_per_period] if groups else np.empty(0)
-    impact = float(fraction[impacts > 0].sum())
+    # (where no start reached an orbit the share that strikes is unknown, not 0)
+    impact = float(fraction[impacts > 0].sum()) if groups else math.nan
     found = {"basin_fraction": fraction,
              "basin_fraction_error": np.sqrt(fraction * (1 - fraction) / samples),
              "impact_basin_fraction": impact,

@@ -487,13 +487,17 @@ def _basin_summary(ds, seconds: float) -> str:
     lines = [f"{points} point(s) x {ds.attrs['samples']} starts ({ds.attrs['starts']}) in "
              f"{seconds:.3g} s"]
     impact = ds["impact_basin_fraction"].values
-    if axes:
+    if axes and np.isnan(impact).all():
+        lines.append("  impact_basin_fraction: unknown: no start reached an orbit")
+    elif axes:
         lines.append(f"  impact_basin_fraction: {np.nanmin(impact):.3g} to "
                      f"{np.nanmax(impact):.3g}; up to {ds.sizes['attractor']} attractors at "
                      "a point")
     else:
         lines.append(f"  {'attractor':>9} {'basin_fraction':>16} {'orbit_period':>12} "
                      f"{'impacts_per_period':>18} {'power [W]':>10} {'x_max [' + _UM + ']':>10}")
+        if ds.sizes["attractor"] == 0:
+            lines.append(f"  {'none':>9}")
         for k in range(ds.sizes["attractor"]):
             a = ds.isel(attractor=k)
             lines.append(f"  {k + 1:>9} {float(a.basin_fraction):>8.3f} +- "
@@ -502,7 +506,7 @@ def _basin_summary(ds, seconds: float) -> str:
                          f"{float(a.x_max) / 1e-6:>10.4g}")
     lost = float(np.nanmax(ds["fraction_not_settled"].values + ds["fraction_diverged"].values))
     if lost > 0:
-        lines.append(f"  up to {lost:.3g} of a point's starts reached no orbit (not settled "
+        lines.append(f"  up to {lost:.0%} of a point's starts reached no orbit (not settled "
                      "or diverged)")
     return "\n".join(lines)
 

@@ -172,7 +172,7 @@ _OUTPUTS = (
     Output("basin_fraction_error", "1", "binomial standard error of basin_fraction, "
            "sqrt(f (1 - f) / samples)", where="basin"),
     Output("impact_basin_fraction", "1", "fraction of the initial states that reach an orbit "
-           "striking the stop", where="basin"),
+           "striking the stop (NaN where none reaches an orbit)", where="basin"),
     Output("impact_basin_fraction_error", "1", "binomial standard error of "
            "impact_basin_fraction", where="basin"),
     Output("fraction_not_settled", "1", "fraction of the initial states whose motion did "

@@ -34,6 +34,24 @@ def test_one_attractor_far_below_the_band():
     assert float(ds.power[0]) == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]), rel=1e-5)
 
 
+def test_where_no_start_settles_the_share_that_strikes_is_unknown(tmp_path, capsys):
+    """Three periods settle no start of the band: every start is counted not settled, and
+    the impact basin fraction and its error are NaN, where they read 0 +- 0 (a map of
+    such points read as "never strikes"); the summary says so in words and percent."""
+    grid = {"frequency": [BAND["frequency"], BAND["frequency"] + 5.0]}
+    ds = basin_map(grid, samples=8, gap=BAND["gap"], steps_per_period=512, max_periods=3,
+                   progress=False)
+    assert (ds.fraction_not_settled == 1.0).all() and ds.sizes["attractor"] == 0
+    assert np.isnan(ds.impact_basin_fraction).all()
+    assert np.isnan(ds.impact_basin_fraction_error).all()
+    assert "NaN where none" in ds.impact_basin_fraction.attrs["long_name"]
+    from harvester_sweep.cli import _basin_summary
+
+    said = _basin_summary(ds, 1.0)
+    assert "unknown: no start reached an orbit" in said
+    assert "up to 100% of a point's starts reached no orbit" in said
+
+
 def test_two_attractors_in_the_band_each_the_orbit_a_reference_finds():
     """Both coexisting orbits are found, every start is counted once, the stop-free one is
     the closed-form phasor (to RK4's error at 1024 steps) and the impacting one is the orbit
