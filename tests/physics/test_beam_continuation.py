@@ -82,6 +82,11 @@ def test_branch_points_meet_the_accuracy_and_are_within_twice_their_estimates(br
     (dict(max_points=1), "max_points"),
     (dict(start=-1.0), "frequency"),
     (dict(stop=140.0), r"stop \[Hz\] = 140.0: must differ from start"),  # (it divided by 0)
+    # (the branch ran to the beam's length and ended there, unsaid)
+    (dict(parameter="contact_position", start=0.025, stop=0.05),
+     r"^stop: contact_position \[m\] = 0.05: must be in \(0, length"),
+    # (it raised TypeError: got multiple values for keyword argument 'frequency')
+    (dict(frequency=240.0), "^frequency: continued, so it cannot also be fixed"),
 ])
 def test_bad_branch_options_are_refused(kwargs, words):
     options = dict(parameter="frequency", start=140.0, stop=150.0) | kwargs
