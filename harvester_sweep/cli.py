@@ -316,13 +316,15 @@ def _scene(args) -> int:
         )
         return EXIT_DIVERGED
     if metrics["status"] == "not settled":
+        from ._engine import MAX_ORBIT_PERIOD
         from .timescales import slowest_decay
 
         rate, what = slowest_decay(result.parameters)
         print(f"harvester-sweep: warning: no steady state within max_periods = "
               f"{result.parameters['max_periods']} (slowest transient without the stop: {what}, "
               f"{rate * 1 / result.parameters['frequency']:.3g} e-folds per period); the motion "
-              "may be chaotic or need more periods: the metrics are over the last 16 periods",
+              "may be chaotic or need more periods: the metrics are over the last "
+              f"{min(metrics['periods_run'], MAX_ORBIT_PERIOD)} periods",
               file=sys.stderr)
     if args.output:
         with _writing(args.output):

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._engine import METRIC, STATE, STATUS
+from ._engine import MAX_ORBIT_PERIOD, METRIC, STATE, STATUS
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,8 @@ class Status:
 STATUSES: tuple[Status, ...] = (
     Status(STATUS.settled, "settled", "steady state found"),
     Status(STATUS.not_settled, "not settled",
-           "no steady state within max_periods: metrics over the last 16 periods"),
+           "no steady state within max_periods: metrics over the last periods run, "
+           f"{MAX_ORBIT_PERIOD} at most"),
     Status(STATUS.diverged, "diverged",
            "the integration diverged (step too coarse for the contact): no metrics"),
     Status(STATUS.too_stiff, "too stiff",

@@ -72,6 +72,15 @@ def test_chattering_preload_says_it_did_not_settle(capsys):
     assert "no steady state within max_periods" in capsys.readouterr().err
 
 
+def test_a_motion_cut_short_says_how_many_periods_its_metrics_cover(capsys):
+    """Two periods from rest cannot settle: the line said its metrics were over the last 16
+    periods; they are over the two it ran."""
+    assert run_scene("paper", max_periods=2).metrics["periods_run"] == 2
+    assert main(["scene", "--set", "max_periods=2"]) == 0
+    err = capsys.readouterr().err
+    assert "the metrics are over the last 2 periods" in err and "16" not in err
+
+
 def test_too_stiff_stops_with_message_and_is_flagged_in_a_sweep(capsys):
     with pytest.raises(ParameterError, match="too stiff: the contact damping .* steps per"):
         run_scene("paper", contact_damping=1.07e11, max_steps_per_period=100_000)
