@@ -283,7 +283,8 @@ def write_result(store, ds, output) -> None:
     (StoreError)."""
     from .datasets import write_netcdf
 
-    # (the sweep it holds, that a resume of it knows it by: ChunkStore._check_finished)
+    # (the sweep it holds, that a resume of it knows it by: ChunkStore._check_finished; a
+    # tip-mass sweep's dataset holds it already, a beam sweep's is given it here)
     ds.attrs.setdefault("sweep_sha256", store.digest)
     try:
         write_netcdf(ds, output)

@@ -487,7 +487,7 @@ def axis(name: str, entry, fixed: dict, registry=PARAMETERS) -> tuple[np.ndarray
                              "sweep for each value")
     if isinstance(entry, dict):
         values, spacing = _range(key, entry), entry.get("scale", "linear")
-        return _checked_range(parameter, values), spacing
+        return _distinct(key, _checked_range(parameter, values), parameter.unit), spacing
     elif isinstance(entry, (list, tuple, np.ndarray)):
         # (a TOML array as it is: a nested one is refused below, not flattened)
         if isinstance(entry, np.ndarray) and entry.ndim != 1:
@@ -509,7 +509,19 @@ def axis(name: str, entry, fixed: dict, registry=PARAMETERS) -> tuple[np.ndarray
             checked.append(parameter.check(value))
         except ParameterError as error:
             raise ParameterError(f"grid.{error}") from None
-    return np.asarray(checked, dtype=np.int64 if parameter.kind == "int" else np.float64), spacing
+    values = np.asarray(checked, dtype=np.int64 if parameter.kind == "int" else np.float64)
+    return _distinct(key, values, parameter.unit), spacing
+
+
+def _distinct(key: str, values: np.ndarray, unit: str) -> np.ndarray:
+    """``values``, refused where one repeats: the dataset's coordinate would hold it twice,
+    and ``ds.sel`` could not pick either point."""
+    unique, counts = np.unique(values, return_counts=True)
+    if (counts > 1).any():
+        twice = unique[counts > 1][0].item()
+        raise ParameterError(f"{key}: the value {twice!r} [{unit}] appears "
+                             f"{counts[counts > 1][0]} times; an axis's values must differ")
+    return values
 
 
 def _checked_range(parameter, values: np.ndarray) -> np.ndarray:

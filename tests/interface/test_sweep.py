@@ -278,6 +278,10 @@ BAD = [
     ({"grid": {"frequncy": [140.0]}}, "grid.frequncy: unknown parameter"),
     ({"grid": {"contact_law": ["flores"]}}, "grid.contact_law: only numeric"),
     ({"grid": {"frequency": []}}, "grid.frequency: the list of values is empty"),
+    # (a repeated value made a coordinate ds.sel could not pick a point of)
+    ({"grid": {"frequency": [140.0, 150.0, 140.0]}},
+     "grid.frequency: the value 140.0 [Hz] appears 2 times; an axis's values must differ"),
+    ({"grid": {"frequency": {"start": 140, "stop": 140, "num": 5}}}, "appears 5 times"),
     ({"grid": {}}, "grid: give at least one"),
     ({"grid": {"frequency": {"start": 100, "stop": 200, "num": 0}}}, "grid.frequency.num"),
     ({"grid": {"frequency": {"start": 100, "stop": 200, "num": 2.5}}}, "grid.frequency.num"),
