@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import re
 import sys
 import time
 import warnings
@@ -29,7 +30,13 @@ EXIT_INTERRUPTED = 130  # the shell's code for a run stopped by Ctrl-C (128 + SI
 
 class _OneLineParser(argparse.ArgumentParser):
     """argparse's parser whose usage errors are one line, as every bad input's is (exit 2),
-    naming the command's --help rather than printing its usage."""
+    naming the command's --help rather than printing its usage; a negative number in
+    exponent form (``-1e-6``, a preloaded gap) is a value, as ``-0.5`` is, not an option."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # (argparse's own pattern, which takes -1 and -0.5 for values, with an exponent)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -64,6 +64,16 @@ def test_usage_errors_exit_2_with_one_line_naming_the_help(argv, words, capsys):
     assert err.count("\n") == 1 and "usage:" not in err
 
 
+@pytest.mark.parametrize("stop", ["-1e-6", "-1E-06", "-2.5e+0", "-0.5", "-3"])
+def test_a_negative_number_in_exponent_form_is_a_value_not_an_option(stop):
+    """`beam-continue gap 1e-6 -1e-6` (to a preloaded stop) said 'the following arguments
+    are required: stop': argparse takes -1e-6 for an option, -0.5 for a value."""
+    from harvester_sweep.cli import _parser
+
+    args = _parser().parse_args(["beam-continue", "gap", "1e-6", stop, "--output", "x.nc"])
+    assert float(args.stop) == float(stop)
+
+
 @pytest.mark.parametrize("argv, words", [
     (["scene", "--set", "mass=-1"], "mass [kg]"),
     (["scene", "--set", "restitution=0"], "restitution [-]"),
