@@ -31,6 +31,7 @@ from .beam_runs import (
     solve_beam,
     system_of,
 )
+from .continuation import NoOrbitError
 from .datasets import multiplier_coordinate
 from .outputs import BIFURCATION_FLAGS, BIFURCATIONS, OUTPUTS
 from .parameters import ParameterError
@@ -217,8 +218,8 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
             raise ParameterError(f"{end}: {error}") from None
     first = solve_beam([p])
     if first.values["status"][0] != 0 or first.values["orbit_period"][0] != 1:
-        raise ParameterError(f"{parameter} = {start:g}: the start has no settled orbit of "
-                             "one forcing period to continue")
+        raise NoOrbitError(f"{parameter} = {start:g}: the start has no settled orbit of "
+                           "one forcing period to continue")
     span = float(stop - start)
     f = _Map(p, parameter, abs(span), int(first.values["steps_per_period"][0]),
              float(first.values["contact_step"][0]))

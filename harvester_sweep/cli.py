@@ -926,9 +926,15 @@ def _beam_branch_or_basins(args) -> int:
     preset = args.preset or DEFAULT_BEAM_PRESET
     _announce_beam_compilation()
     if args.command == "beam-continue":
-        ds = continue_beam_branch(args.parameter, args.start, args.stop, preset,
-                                  step=args.step, max_points=args.max_points,
-                                  period_doubling=args.period_doubling, **overrides)
+        from .continuation import NoOrbitError
+
+        try:
+            ds = continue_beam_branch(args.parameter, args.start, args.stop, preset,
+                                      step=args.step, max_points=args.max_points,
+                                      period_doubling=args.period_doubling, **overrides)
+        except NoOrbitError as error:  # (as continue's: no result, not bad input)
+            print(f"harvester-sweep: error: {error}", file=sys.stderr)
+            return EXIT_DIVERGED
         found = int((ds["bifurcation"] > 0).sum())
         branches = int(ds["branch"].max()) + 1
         what = (f"{ds.sizes['point']} branch points ({branches} branch"

@@ -7,10 +7,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harvester_sweep import NoOrbitError, continue_branch, run_scene
 from harvester_sweep import bimorph as bm
-from harvester_sweep import continue_branch, run_scene
 from harvester_sweep.beam_continuation import continue_beam_branch
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
+from harvester_sweep.cli import main
 from harvester_sweep.outputs import BIFURCATIONS
 from harvester_sweep.parameters import ParameterError
 
@@ -93,6 +94,18 @@ def test_bad_branch_options_are_refused(kwargs, words):
     with pytest.raises(ParameterError, match=words):
         continue_beam_branch(options.pop("parameter"), options.pop("start"),
                              options.pop("stop"), "bimorph_tip", n_modes=1, **options)
+
+
+def test_a_start_without_an_orbit_of_one_period_is_no_result_as_continues(tmp_path, capsys):
+    """Two modes at 200 Hz settle on an orbit of five periods: no branch of period one
+    starts there. As the tip-mass continue says of a start with no orbit: NoOrbitError,
+    exit status 3 (beam-continue said it was bad input, exit 2)."""
+    with pytest.raises(NoOrbitError, match="no settled orbit of one forcing period"):
+        continue_beam_branch("frequency", 200.0, 280.0, "bimorph_tip", n_modes=2)
+    argv = ["beam-continue", "frequency", "200", "280", "--set", "n_modes=2", "--output",
+            str(tmp_path / "b.nc")]
+    assert main(argv) == 3
+    assert capsys.readouterr().err.count("\n") == 1
 
 
 def test_a_period_doubling_switches_to_the_tip_mass_models_doubled_orbits():
