@@ -128,6 +128,10 @@ class ChunkStore:
             if resume and self.output.exists():
                 self._check_finished()
             return
+        if not (self.dir / "manifest.json").is_file():  # (an interrupted run writes one first)
+            raise ParameterError(
+                f"{self.dir} is in the way: it holds no partial result of a run (no "
+                "manifest.json), so there is nothing to resume; delete it to start over")
         if not resume:
             raise ParameterError(
                 f"{self.dir} holds the partial result of an interrupted run: resume it "

@@ -330,6 +330,8 @@ def load_sweep(source, model: str | None = "tip_mass") -> SweepSpec:
         registry, default_preset, resolve = PARAMETERS, DEFAULT_PRESET, resolve_parameters
     preset = source.get("preset", default_preset)
     fixed = dict(table(source, "parameters"))
+    if not beam and "model" not in source:
+        _beam_without_model(preset, fixed, table(source, "grid"))
     # (names checked before the call: `preset` among them would be a TypeError)
     for name in fixed if beam else ():
         if name not in registry:
@@ -388,6 +390,22 @@ def load_sweep(source, model: str | None = "tip_mass") -> SweepSpec:
             raise ParameterError(f"sweep.samples = {samples}: more than max_periods = {budget:g}, "
                                  "the most forcing periods a point runs")
     return spec
+
+
+def _beam_without_model(preset, fixed: dict, grid: dict) -> None:
+    """Refuse a file that names a beam preset or parameter but no ``model``: it is read as
+    the tip-mass model's, whose messages ("unknown parameter 'n_modes'") would not say
+    what is missing."""
+    from .beam_parameters import BEAM_PARAMETER_PRESETS, BEAM_PARAMETERS
+
+    beam_only = [name for name in (*fixed, *grid)
+                 if name in BEAM_PARAMETERS and name not in PARAMETERS]
+    preset = preset if isinstance(preset, str) else None  # (a bad one is refused later)
+    if preset in BEAM_PARAMETER_PRESETS or beam_only:
+        what = (f"preset {value_text(preset)}" if preset in BEAM_PARAMETER_PRESETS
+                else f"parameter {value_text(beam_only[0])}")
+        raise ParameterError(f"{what} is the beam model's: add model = \"beam\" to the "
+                             "sweep file (without it the file is the tip-mass model's)")
 
 
 def _check_model(named, model: str | None) -> None:

@@ -226,6 +226,18 @@ def test_a_resume_of_a_finished_output_runs_nothing_and_replaces_no_other(tmp_pa
     assert stray.read_text() == "not netCDF"
 
 
+@pytest.mark.parametrize("resume", [False, True])
+def test_a_partial_folder_without_a_manifest_is_in_the_way_either_way(tmp_path, resume):
+    """An empty OUT.nc.partial/ (or a file of that name) holds nothing to resume: a plain
+    run said "resume it", a resume "delete the folder"; both now say it is in the way."""
+    for name, make in (("a.nc", lambda p: p.mkdir()), ("b.nc", lambda p: p.write_text(""))):
+        make(tmp_path / f"{name}.partial")
+        with pytest.raises(ParameterError, match=r"\.partial is in the way: it holds no "
+                           "partial result .* nothing to resume; delete it"):
+            run_sweep(spec({"frequency": [140.0]}), tmp_path / name, resume=resume,
+                      progress=False)
+
+
 def test_a_partial_result_of_another_orbit_solver_is_refused(tmp_path, monkeypatch):
     """A development install changes the orbit solver without changing the version or the
     engine: chunks it solved are not mixed with the new solver's."""
@@ -282,6 +294,12 @@ BAD = [
     ({"grid": {"frequency": [140.0, 150.0, 140.0]}},
      "grid.frequency: the value 140.0 [Hz] appears 2 times; an axis's values must differ"),
     ({"grid": {"frequency": {"start": 140, "stop": 140, "num": 5}}}, "appears 5 times"),
+    # (they read "preset 'bimorph_tip' is unknown", "unknown parameter 'n_modes'")
+    ({"preset": "bimorph_tip", "grid": {"frequency": [140.0]}},
+     "preset 'bimorph_tip' is the beam model's: add model = \"beam\""),
+    ({"parameters": {"n_modes": 2}, "grid": {"frequency": [140.0]}},
+     "parameter 'n_modes' is the beam model's"),
+    ({"grid": {"rod_modes": [1, 2]}}, "parameter 'rod_modes' is the beam model's"),
     ({"grid": {}}, "grid: give at least one"),
     ({"grid": {"frequency": {"start": 100, "stop": 200, "num": 0}}}, "grid.frequency.num"),
     ({"grid": {"frequency": {"start": 100, "stop": 200, "num": 2.5}}}, "grid.frequency.num"),
