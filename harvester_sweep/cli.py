@@ -172,7 +172,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--resume", action="store_true",
                      help="finish an interrupted run from the chunks in OUT.nc.partial/")
     run.add_argument("--quiet", action="store_true",
-                     help="no estimate, no progress bar and no summary")
+                     help="no estimate, no progress bar and no summary (warnings, such "
+                     "as points that did not settle, are still said)")
     run.add_argument("--yes", action="store_true",
                      help="start the sweep even when it is estimated to take more than an hour")
     where = run.add_mutually_exclusive_group()
