@@ -568,12 +568,43 @@ def _open(path: str):
     try:
         return xr.open_dataset(path)
     except (OSError, ValueError) as error:
-        why = str(error).splitlines()[0]  # (xarray's own runs over several lines)
-        raise ParameterError(f"{path}: cannot read it as netCDF ({why})") from None
+        raise ParameterError(f"{path}: cannot read it as netCDF ({_unreadable(path, error)})"
+                             ) from None
+
+
+#: The first bytes of a netCDF file: classic (CDF-1, -2, -5) or netCDF-4 (HDF5).
+_NETCDF_STARTS = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
+
+
+def _unreadable(path: str, error: Exception) -> str:
+    """Why ``path`` could not be opened, short: xarray's own reason for a file no engine
+    takes is a paragraph on engines, of no use to one who gave a text file."""
+    file = Path(path)
+    if not file.exists():
+        return "no such file"
+    if file.is_dir():
+        return "it is a folder"
+    try:
+        with open(file, "rb") as opened:
+            head = opened.read(512)
+    except OSError as failure:
+        return failure.strerror or str(failure)
+    if not head:
+        return "it is empty"
+    if not head.startswith(_NETCDF_STARTS):
+        try:
+            text = b"\x00" not in head and bool(head.decode("utf-8"))
+        except UnicodeDecodeError:
+            text = False
+        return ("it holds text, not netCDF" if text
+                else "not a netCDF file: it does not start as one does")
+    if isinstance(error, OSError) and error.strerror:
+        return error.strerror  # (the netCDF library's: "NetCDF: HDF error")
+    return str(error).splitlines()[0]
 
 
 def _plot(args) -> int:
-    from .plots import plot_basins, plot_branch, plot_scene, plot_sweep
+    from .plots import check_over, dataset_kind, plot_basins, plot_branch, plot_scene, plot_sweep
 
     _check_output(args.output, _FIGURES)
     both = sorted(set(args.log) & set(args.linear))
@@ -586,7 +617,7 @@ def _plot(args) -> int:
         _check_written_here(path, opened)
     if sweeps and "point" not in ds.dims:
         raise ParameterError("--over: draws sweeps under a branch (a file written by "
-                             "'continue')")
+                             f"'continue'); {args.dataset} is {dataset_kind(ds)}")
     if ds.attrs.get("model") == "beam":
         from .plots import (
             plot_beam_basins,
@@ -605,6 +636,11 @@ def _plot(args) -> int:
         return 0
     with ds, _writing(args.output), _complete(args.dataset):
         if "point" in ds.dims:
+            for path, sweep in zip(args.over, sweeps):
+                try:
+                    check_over(ds, sweep)
+                except ParameterError as error:
+                    raise ParameterError(f"--over {path}: {error}") from None
             plot_branch(ds, args.output, sweeps, scales=scales)
         elif "attractor" in ds.dims:
             plot_basins(ds, args.output, scales=scales)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .materials import hertz_stiffness_from_bodies
-from .outputs import BIFURCATIONS, OUTPUTS, STATUS_NAMES
+from .outputs import BIFURCATIONS, ENGINE_METRICS, OUTPUTS, STATUS_NAMES
 from .parameters import PARAMETERS, ParameterError
 
 if TYPE_CHECKING:  # (matplotlib is imported where a figure is drawn: the command line's
@@ -227,7 +227,13 @@ def plot_sweep(ds, path=None, scales=None) -> Figure:
     if len(axes_names) == 2:
         return _save(_plot_maps(ds, axes_names, scales), path)
     raise ParameterError(f"the dataset has {len(axes_names)} grid axes ({', '.join(axes_names)}): "
-                         "plot draws one or two; select a slice first, e.g. ds.isel(gap=0)")
+                         f"plot draws one or two; {_slice_advice(axes_names)}")
+
+
+def _slice_advice(axes_names: list) -> str:
+    """How to cut a dataset of too many grid axes down, naming one of its own axes."""
+    return (f"select a slice first with xarray, e.g. ds.isel({axes_names[-1]}=0), and "
+            "write it with to_netcdf")
 
 
 #: Marker of each kind of bifurcation; the larger are drawn first, under the smaller, so
@@ -322,6 +328,8 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
     """
     axis = ds.attrs["continued_parameter"]
     _check_scales(scales, [axis])
+    for sweep in sweeps:
+        check_over(ds, sweep)
     upper, lower = _stops(ds, axis, ds[axis].values)
     names = ["x_max"] + (["x_min"] if lower is not None else []) + ["power"]
     fig = _new_figure((9, 3.2 * len(names) + 0.6))
@@ -343,10 +351,6 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
         scale, y_label = _axis(ds, name, ds[name].values, log_y)
         y = ys[name] = ds[name].values / scale
         for sweep in (sweep for sweep in sweeps if name in sweep):  # (x_min if it was asked)
-            dims = [d for d in sweep[name].dims if d != "direction"]
-            if dims != [axis]:
-                raise ParameterError(f"a sweep drawn under a branch must run along {axis} "
-                                     f"alone (it runs along {', '.join(dims)})")
             for direction in _directions(sweep):
                 values = sweep[name].sel(direction=direction) if direction else sweep[name]
                 ax.plot(sweep[axis].values / x_scale, values / scale, ls="none", alpha=0.7,
@@ -386,6 +390,50 @@ def plot_branch(ds, path=None, sweeps=(), scales=None) -> Figure:
                 items.append((x[b["index"]], ys[name][b["index"]], texts[k]))
         _label_points(ax, items)
     return _save(fig, path)
+
+
+def dataset_kind(ds) -> str:
+    """What a dataset of this tool is, as a message names it."""
+    model = "beam " if ds.attrs.get("model") == "beam" else ""
+    if "point" in ds.dims:
+        return f"a {model}branch (of 'continue')"
+    if "time" in ds.dims:
+        return f"a {model}scene"
+    if "attractor" in ds.dims:
+        return f"{model}basins of attraction (of 'basins')"
+    return f"a {model}sweep"
+
+
+def check_over(branch, sweep) -> None:
+    """Refuse a dataset that cannot be drawn under ``branch`` (``plot_branch``'s
+    ``sweeps``): anything but a sweep, a sweep of another model or preset (its orbits are
+    another harvester's, drawn on the branch's axes without a word), and one that does not
+    run along the branch's parameter alone.
+
+    Raises
+    ------
+    ParameterError
+        Saying what ``sweep`` is and why it is not drawn.
+    """
+    axis = branch.attrs["continued_parameter"]
+    kind = dataset_kind(sweep)
+    if kind not in ("a sweep", "a beam sweep"):
+        raise ParameterError(f"{kind}, not a sweep: a branch is drawn over sweeps (of 'run') "
+                             f"along {axis}")
+    # (a file without the attribute is the tip-mass model's: sweep_file.MODELS' default)
+    models = [f.attrs.get("model", "tip_mass") for f in (sweep, branch)]
+    if models[0] != models[1]:
+        raise ParameterError(f"a sweep of the {models[0]} model, the branch is of the "
+                             f"{models[1]} model: not drawn under it")
+    presets = [f.attrs.get("preset") for f in (sweep, branch)]
+    if all(isinstance(p, str) for p in presets) and presets[0] != presets[1]:
+        raise ParameterError(f"a sweep of preset {presets[0]}, the branch is of preset "
+                             f"{presets[1]}: not drawn under it")
+    dims = [d for d in sweep.dims if d not in ("direction", "sample", "multiplier")]
+    if dims != [axis]:
+        along = ", ".join(dims) if dims else "no grid axis: a single point"
+        raise ParameterError(f"a sweep drawn under a branch must run along {axis} alone "
+                             f"(it runs along {along})")
 
 
 def _on_panel(b: dict, name: str) -> bool:
@@ -534,13 +582,18 @@ def plot_basins(ds, path=None, scales=None) -> Figure:
     Over two grid axes: a map of ``impact_basin_fraction``, the share of starts that land
     on an orbit striking the stop. Over one: that share with its standard error. At one
     point: each attractor's basin fraction, labelled with its impacts per period and power.
-    ``scales`` as for :func:`plot_sweep`.
+    ``scales`` as for :func:`plot_sweep`. The grid axes are the data's dimensions (a
+    dataset sliced with ``ds.isel`` keeps the ``grid_axes`` attribute of its whole grid).
     """
-    axes_names = ds.attrs["grid_axes"].split()
+    name = "impact_basin_fraction"
+    axes_names = [d for d in ds[name].dims if d != "attractor"]
     _check_scales(scales, axes_names)
+    if len(axes_names) > 2:
+        raise ParameterError(f"basins over {len(axes_names)} grid axes "
+                             f"({', '.join(axes_names)}): plot draws one or two; "
+                             f"{_slice_advice(axes_names)}")
     fig = _new_figure((7, 4.8))
     ax = fig.subplots()
-    name = "impact_basin_fraction"
     if len(axes_names) == 2:
         x_name, y_name = sorted(axes_names, key=lambda a: a != "frequency")  # frequency across
         mesh = _mesh(ax, ds, ds[name], x_name, y_name, scales, vmin=0.0, vmax=1.0,
@@ -553,12 +606,21 @@ def plot_basins(ds, path=None, scales=None) -> Figure:
         scale, label = _axis(ds, x_name, values, log)
         ax.errorbar(values / scale, ds[name].values, yerr=ds[name + "_error"].values,
                     marker="o", ms=3, capsize=2, lw=1.0)
+        lost = ~np.isfinite(ds[name].values)  # (no start reached an orbit: unknown)
+        if lost.any():
+            ax.plot(values[lost] / scale, np.full(int(lost.sum()), 0.04), ls="none",
+                    marker="x", color="k", transform=ax.get_xaxis_transform(),
+                    gid="no orbit", label=f"no start reached an orbit ({int(lost.sum())})")
+            ax.legend(fontsize="small")
         ax.set_ylim(-0.03, 1.03)
         ax.set_ylabel(_label(ds, name))
         ax.set_xlabel(label)
         ax.set_xscale("log" if log else "linear")
         ax.grid(alpha=0.3)
     elif not axes_names:
+        # (a point sliced from a map keeps the map's attractor slots; those its starts did
+        # not reach are NaN there)
+        ds = ds.isel(attractor=np.flatnonzero(np.isfinite(ds["basin_fraction"].values)))
         k = np.arange(1, ds.sizes["attractor"] + 1)
         ax.bar(k, ds["basin_fraction"].values, yerr=ds["basin_fraction_error"].values,
                capsize=3)
@@ -567,9 +629,14 @@ def plot_basins(ds, path=None, scales=None) -> Figure:
                               ds["power"].values)])
         ax.set_ylabel(_label(ds, "basin_fraction"))
         ax.set_ylim(0.0, 1.0)
-    else:
-        raise ParameterError(f"plot: basins over {len(axes_names)} grid axes; draw one or two "
-                             "(select the others with xarray first)")
+    if not np.isfinite(ds[name].values).any():
+        lost = [f"{float(np.max(ds[what].values)):.0%} {what.replace('fraction_', '')}"
+                .replace("_", " ") for what in ("fraction_not_settled", "fraction_diverged")
+                if float(np.max(ds[what].values)) > 0]
+        ax.text(0.5, 0.5, "no start reached an orbit" + (f": up to {', '.join(lost)}"
+                                                          if lost else ""),
+                transform=ax.transAxes, ha="center", va="center", gid="no value",
+                bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="none", alpha=0.8))
     _no_offset(ax)
     starts = (f"base shock {ds.attrs['shock']:g} m/s" if "shock" in ds.attrs
               else "starts in a box around rest")
@@ -599,13 +666,47 @@ def _no_offset(ax) -> None:
             axis.get_major_formatter().set_useOffset(False)
 
 
+#: The metrics a sweep stores whatever its outputs (sweep_file.ALWAYS_STORED): never drawn
+#: as a response of their own (status marks the points instead).
+_BOOKKEEPING = ("status", "periods_run")
+
+
+def _line_outputs(ds) -> tuple[list, list]:
+    """The responses and the stroboscopic samples drawn against one grid axis: power and
+    x_max where the file holds them, else each metric it holds (a sweep asked for v_rms
+    alone drew an empty frame); orbit_period comes with the samples and is not drawn."""
+    strobes = [name for name in ("strobe_displacement", "strobe_voltage") if name in ds]
+    responses = [name for name in ("power", "x_max") if name in ds]
+    if not responses:
+        skip = _BOOKKEEPING + (("orbit_period",) if strobes else ())
+        responses = [name for name in ENGINE_METRICS if name in ds and name not in skip]
+    if not responses and not strobes:
+        raise ParameterError("the sweep holds no output plot draws: it needs a metric "
+                             '(power, x_max, v_rms, ...) or "strobe" in sweep.outputs')
+    return responses, strobes
+
+
+def _say_no_value(ax, ds, name: str) -> None:
+    """Where no point has a value of ``name`` (all NaN), say so across the panel, with the
+    points' statuses (as the markers at its foot count them), else why the registry leaves
+    it NaN: an empty frame read as a plot that failed."""
+    if np.isfinite(ds[name].values).any():
+        return
+    status = ds["status"].values if "status" in ds else np.zeros(0)
+    unsettled = [(s, int(np.sum(status == STATUS_NAMES.index(s)))) for s in _UNSETTLED]
+    said = ", ".join(f"{s} ({count} of {status.size})" for s, count in unsettled if count)
+    why = said or (OUTPUTS[name].comment if name in OUTPUTS else "")
+    ax.text(0.5, 0.5, f"no point has a value of {name}" + (f": {why}" if why else ""),
+            transform=ax.transAxes, ha="center", va="center", wrap=True, gid="no value",
+            bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="none", alpha=0.8))
+
+
 def _plot_lines(ds, axis: str, scales=None) -> Figure:
     """Responses (and bifurcation diagrams) against one grid axis."""
     from .linear import linear_response
 
-    responses = [name for name in ("power", "x_max") if name in ds]
-    strobes = [name for name in ("strobe_displacement", "strobe_voltage") if name in ds]
-    n = max(len(responses) + len(strobes), 1)
+    responses, strobes = _line_outputs(ds)
+    n = len(responses) + len(strobes)
     fig = _new_figure((8, 2.8 * n + 0.6))
     panels = list(np.atleast_1d(fig.subplots(n, 1, sharex=True)))
     values = ds[axis].values
@@ -615,11 +716,13 @@ def _plot_lines(ds, axis: str, scales=None) -> Figure:
     point = {**{name: value for name, value in _fixed(ds).items() if name in PARAMETERS},
              axis: values}
     X, V = linear_response(**point)
-    linear = {"power": np.abs(V) ** 2 / (2 * point["resistance"]), "x_max": np.abs(X)}
+    power = np.abs(V) ** 2 / (2 * point["resistance"])
+    linear = {"power": power, "power_peak": 2 * power, "v_rms": np.abs(V) / np.sqrt(2),
+              "v_peak": np.abs(V), "x_max": np.abs(X), "x_min": -np.abs(X)}
     linear = {k: np.broadcast_to(v, x.shape) for k, v in linear.items()}  # (an axis it
     # does not depend on, the gap: one value)
     for ax, name in zip(panels, responses):
-        log_y = name == "power"
+        log_y = name in ("power", "power_peak")
         scale, y_label = _axis(ds, name, ds[name].values, log_y)
         for direction in _directions(ds):
             data = ds[name].sel(direction=direction) if direction else ds[name]
@@ -629,18 +732,23 @@ def _plot_lines(ds, axis: str, scales=None) -> Figure:
                 status = ds["status"].sel(direction=direction) if direction else ds["status"]
                 _mark_unsettled(ax, status.values, x, data.values / scale, legend=False,
                                 where=direction or "")
-        ax.plot(x, linear[name] / scale, color="0.4", lw=0.8, ls=":",
-                label="no stop (closed form)")
+        if name in linear:
+            ax.plot(x, linear[name] / scale, color="0.4", lw=0.8, ls=":",
+                    label="no stop (closed form)")
+        y = ds[name].values / scale
+        finite = y[np.isfinite(y)]
+        _say_no_value(ax, ds, name)
         if log_y:
             ax.set_yscale("log")
-        else:
-            y = ds[name].values / scale
-            top = np.nanmax(y)
+        elif finite.size:  # (none, every point too stiff: matplotlib's limits, NaN-free)
+            low, top = min(0.0, finite.min()), max(0.0, finite.max())
             upper = _stops(ds, axis, values)[0]
             if name == "x_max" and _stop_line(ax, x, upper, y, "stop"):
                 top = max(top, np.nanmax(upper) / scale)
-            # From 0 to just above the data and the stop: the closed form peaks far higher.
-            ax.set_ylim(min(0.0, np.nanmin(y)), 1.15 * top)
+            # From 0 to just beyond the data and the stop: the closed form peaks far higher.
+            pad = 0.15 * (top - low)
+            if pad > 0:  # (all zero, no impacts: matplotlib's own limits)
+                ax.set_ylim(low - pad if low < 0 else low, top + pad if top > 0 else top)
         ax.set_ylabel(y_label)
         ax.legend(fontsize="small")
     for ax, name in zip(panels[len(responses):], strobes):
@@ -652,6 +760,7 @@ def _plot_lines(ds, axis: str, scales=None) -> Figure:
                     gid=f"strobe {direction or 'from rest'}", **_DOTS[direction])
             ax.plot([], [], ls="none", label=direction or "from rest",
                     **{**_DOTS[direction], "ms": 4.5})
+        _say_no_value(ax, ds, name)
         ax.set_ylabel(f"{name.replace('strobe_', '')} y(nT) [{shown}]")
         ax.set_title(f"bifurcation diagram: last {ds.sizes['sample']} stroboscopic samples",
                      loc="left", fontsize="medium")
@@ -696,7 +805,8 @@ def _mark_unsettled(ax, status, x, y, legend: bool = True, where: str = "") -> N
     on a white edge so that it reads on any colour, counted in the legend (drawn here
     when ``legend``; ``where``: a direction, said with the count). A reader must see which
     values are not a steady state's (a not-settled point's metrics are its last
-    periods')."""
+    periods'). A point with no value there (NaN: too stiff, diverged) is marked at the
+    foot of the panel, at its place along the x axis: it has no height to be drawn at."""
     from matplotlib import patheffects
 
     status = np.asarray(status)
@@ -705,9 +815,18 @@ def _mark_unsettled(ax, status, x, y, legend: bool = True, where: str = "") -> N
     for name, marker in _UNSETTLED.items():
         mask = status == STATUS_NAMES.index(name)
         if mask.any():
-            ax.plot(x[mask], y[mask], ls="none", marker=marker, color="k", ms=6,
-                    path_effects=[patheffects.withStroke(linewidth=2.5, foreground="w")],
-                    label=f"{name} ({int(mask.sum())}{', ' + where if where else ''})")
+            style = dict(ls="none", marker=marker, color="k", ms=6, path_effects=[
+                patheffects.withStroke(linewidth=2.5, foreground="w")])
+            label = f"{name} ({int(mask.sum())}{', ' + where if where else ''})"
+            placed = mask & np.isfinite(y)
+            if placed.any():
+                ax.plot(x[placed], y[placed], label=label, **style)
+                label = "_" + label  # (counted once in the legend)
+            unplaced = mask & ~placed
+            if unplaced.any():
+                ax.plot(x[unplaced], np.full(int(unplaced.sum()), 0.04), label=label,
+                        transform=ax.get_xaxis_transform(), gid=f"{name}, no value",
+                        **style)
             marked = True
     if marked and legend:
         ax.legend(fontsize="small", loc="upper right", framealpha=0.8)
@@ -893,7 +1012,7 @@ def plot_beam_sweep(ds, path=None) -> Figure:
             _no_offset(ax)
     else:
         raise ParameterError(f"the dataset has {len(grid)} grid axes ({', '.join(grid)}): "
-                             "plot draws one or two; select a slice first")
+                             f"plot draws one or two; {_slice_advice(grid)}")
     _suptitle(fig, f"beam model, preset {ds.attrs.get('preset', '')}")
     return _save(fig, path)
 

@@ -5,19 +5,25 @@ scales, unit labels, cell edges, marker labels and where the titles and legends 
 from __future__ import annotations
 
 import itertools
+import re
+import warnings
 
 import numpy as np
 import pytest
+import xarray as xr
 from matplotlib.text import Text
 
 from harvester_sweep import (
+    ParameterError,
     basin_fractions,
     basin_map,
+    cli,
     continue_branch,
     resolve_parameters,
     run_scene,
 )
 from harvester_sweep.cli import _bifurcation_table
+from harvester_sweep.outputs import STATUS_NAMES
 from harvester_sweep.plots import bifurcation_points, plot_basins, plot_branch, plot_sweep
 from harvester_sweep.sweep import run_sweep
 
@@ -372,3 +378,187 @@ def test_a_beam_map_is_drawn_as_the_tip_mass_models_with_its_unsettled_points():
         ((label, x, y),) = _marks(ax, "not settled")
         assert label == "not settled (1)" and (x[0], y[0]) == pytest.approx((150.0, 2.0))
     assert power.collections[0].norm.__class__.__name__ == "LogNorm"
+
+
+def _err_lines(capsys) -> list:
+    """The command's lines on stderr (the note of a cold numba cache left out)."""
+    return [line for line in capsys.readouterr().err.splitlines()
+            if "compiling the RK4 kernel" not in line]
+
+
+def _at_foot(fig, ax, line, x_values) -> bool:
+    """Whether ``line``'s markers lie at ``x_values`` along the axis and at the foot of the
+    panel (its lowest tenth), in display coordinates."""
+    _drawn(fig)
+    shown = line.get_transform().transform(np.column_stack([line.get_xdata(),
+                                                            line.get_ydata()]))
+    want = ax.transData.transform(np.column_stack([x_values, np.ones(len(x_values))]))[:, 0]
+    box = ax.get_window_extent()
+    return bool(np.all(np.isfinite(shown)) and np.allclose(shown[:, 0], want)
+                and np.all((shown[:, 1] > box.y0) & (shown[:, 1] < box.y0 + 0.1 * box.height)))
+
+
+def test_a_line_plot_whose_points_are_all_too_stiff_says_so_and_marks_them(tmp_path, capsys):
+    """Every point refused as too stiff (max_steps_per_period = 100), up and down: each
+    panel says that no point has a value and why, and marks the points at its foot, as
+    the two-axis map marks its cells; no numpy warning. (It warned "All-NaN slice" twice
+    and crashed on NaN axis limits.)"""
+    ds = run_sweep({"preset": "paper", "parameters": {"gap": 1e-6, "max_steps_per_period": 100},
+                    "grid": {"frequency": [130.0, 140.0]},
+                    "sweep": {"directions": ["up", "down"]}}, progress=False)
+    assert (ds["status"].values == STATUS_NAMES.index("too stiff")).all()  # (the case)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plot_sweep(ds)
+    for ax, name in zip(fig.axes, ("power", "x_max")):
+        said = [t.get_text() for t in ax.texts if t.get_gid() == "no value"]
+        assert said == [f"no point has a value of {name}: too stiff (4 of 4)"]
+        marks = [line for line in ax.get_lines() if line.get_label().startswith("too stiff")]
+        assert [line.get_label() for line in marks] == ["too stiff (2, up)",
+                                                        "too stiff (2, down)"]
+        assert all(_at_foot(fig, ax, line, [130.0, 140.0]) for line in marks)
+    path = tmp_path / "stiff.nc"
+    ds.to_netcdf(path)
+    assert cli.main(["plot", str(path), "--output", str(tmp_path / "s.png")]) == 0
+    assert _err_lines(capsys) == [] and (tmp_path / "s.png").exists()
+
+
+def test_a_point_with_no_value_on_a_curve_is_marked_at_the_foot_of_the_panel(load_map):
+    """A too-stiff point among settled ones (NaN metrics, set by hand on a real run) is
+    marked where it lies along the axis: it was drawn at a NaN height, unseen."""
+    ds = load_map.sel(resistance=1e4).copy(deep=True)
+    where = dict(direction="up", frequency=240.0)
+    ds["status"].loc[where] = STATUS_NAMES.index("too stiff")
+    ds["power"].loc[where] = np.nan
+    fig = plot_sweep(ds)
+    ax = fig.axes[0]
+    (mark,) = [line for line in ax.get_lines() if line.get_label().startswith("too stiff")]
+    assert mark.get_label() == "too stiff (1, up)" and _at_foot(fig, ax, mark, [240.0])
+    assert not [t for t in ax.texts if t.get_gid() == "no value"]  # (others have values)
+
+
+def test_a_sweep_without_power_and_x_max_plots_the_outputs_it_holds():
+    """outputs = ["v_rms"] drew an empty frame: it draws v_rms, with its closed form, which
+    the run matches where the stop is out of reach (gap 1 m); a sweep holding no output
+    that plot draws is refused in one line."""
+    ds = run_sweep({"preset": "paper", "parameters": {"gap": 1.0, **FAST},
+                    "grid": {"frequency": [200.0, 240.0]}, "sweep": {"outputs": ["v_rms"]}},
+                   progress=False)
+    (ax,) = plot_sweep(ds).axes
+    assert ax.get_ylabel() == "v_rms [\u00b5V]"
+    lines = {line.get_label(): line.get_ydata() for line in ax.get_lines()}
+    np.testing.assert_allclose(lines["from rest"], ds["v_rms"].values / 1e-6)
+    np.testing.assert_allclose(lines["no stop (closed form)"], ds["v_rms"].values / 1e-6,
+                               rtol=1e-5)
+    with pytest.raises(ParameterError, match="no output plot draws"):
+        plot_sweep(ds.drop_vars("v_rms"))
+
+
+def _basins(axes: dict):
+    """A basins dataset over ``axes`` as basins.basin_map lays it out: two attractor slots,
+    the first point's second NaN (its starts reached one attractor)."""
+    dims = tuple(axes)
+    shape = tuple(len(v) for v in axes.values())
+    share = np.linspace(0.1, 0.9, int(np.prod(shape))).reshape(shape)
+    basin = np.stack([share, 1 - share], axis=-1)
+    basin[(0,) * len(dims) + (1,)] = np.nan
+    seen = np.isfinite(basin)
+    per = dims + ("attractor",)
+    return xr.Dataset(
+        {"impact_basin_fraction": (dims, share),
+         "impact_basin_fraction_error": (dims, 0.1 * np.ones(shape)),
+         "basin_fraction": (per, basin), "basin_fraction_error": (per, 0.1 * basin),
+         "orbit_period": (per, seen.astype(int)),
+         "impacts_per_period": (per, np.where(seen, 1.0, np.nan)),
+         "power": (per, np.where(seen, 1e-15, np.nan))},
+        coords={**{k: (k, np.asarray(v, dtype=float)) for k, v in axes.items()},
+                "attractor": ("attractor", [1, 2])},
+        attrs={"grid_axes": " ".join(dims), "samples": 4, "shock": 0.01, "preset": "paper"})
+
+
+def test_sliced_basins_plot_as_basins_of_as_many_axes_and_the_refusal_names_an_axis():
+    """ds.isel, as the refusal of three axes advises, keeps grid_axes of the whole grid: a
+    slice was refused as three axes, or failed in sortby ("not 1-D"). The refusals of
+    three axes (basins and sweeps) name one of the dataset's own axes (they said gap)."""
+    ds = _basins({"frequency": [200.0, 240.0], "resistance": [1e3, 1e4],
+                  "damping_ratio": [0.01, 0.02]})
+    for plot, data in ((plot_basins, ds),
+                       (plot_sweep, ds[["impact_basin_fraction"]].rename(
+                           impact_basin_fraction="power"))):
+        with pytest.raises(ParameterError, match="3 grid axes") as refused:
+            plot(data)
+        (axis,) = re.findall(r"isel\((\w+)=0\)", str(refused.value))
+        assert axis in ds["impact_basin_fraction"].dims
+    plane = ds.isel(damping_ratio=1)
+    ax = plot_basins(plane).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("frequency [Hz]", "resistance [kOhm]")
+    np.testing.assert_allclose(ax.collections[0].get_array(),
+                               plane["impact_basin_fraction"].values.T)  # (rows: loads)
+    line = ds.isel(damping_ratio=1, resistance=0)
+    ax = plot_basins(line).axes[0]
+    assert ax.get_xlabel() == "frequency [Hz]"
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(),
+                               line["impact_basin_fraction"].values)
+    point = ds.isel(damping_ratio=0, resistance=0, frequency=0)  # (one attractor reached)
+    ax = plot_basins(point).axes[0]
+    assert len(ax.patches) == 1
+    assert not [t for t in ax.get_xticklabels() if "nan" in t.get_text()]
+
+
+def test_over_refuses_what_is_not_a_sweep_of_the_branchs_model_and_says_what_it_is(
+        s_curve, tmp_path, capsys):
+    """A beam sweep (or another preset's) was drawn under a tip-mass branch without a
+    word; a scene or a branch given to --over was said to run along "" or "point"."""
+    from harvester_sweep.beam_runs import beam_sweep
+
+    sweep = run_sweep({"preset": "paper", "parameters": {"gap": 1e-6, **FAST},
+                       "grid": {"frequency": [220.0, 260.0]}}, progress=False)
+    plot_branch(s_curve, sweeps=[sweep])  # (of its model and preset: drawn)
+    beam = beam_sweep({"frequency": [220.0, 260.0]}, "bimorph_tip", n_modes=1)
+    with pytest.raises(ParameterError, match="beam model"):
+        plot_branch(s_curve, sweeps=[beam])
+    other = sweep.copy()
+    other.attrs["preset"] = "strong_coupling"
+    with pytest.raises(ParameterError, match="preset strong_coupling"):
+        plot_branch(s_curve, sweeps=[other])
+    branch = tmp_path / "branch.nc"
+    s_curve.to_netcdf(branch)
+    run_scene("paper", **FAST).to_netcdf(tmp_path / "scene.nc")
+    beam.to_netcdf(tmp_path / "beam.nc")
+    for over, said in (("beam.nc", "beam model"), ("scene.nc", "a scene"),
+                       ("branch.nc", "a branch")):
+        argv = ["plot", str(branch), "--over", str(tmp_path / over), "--output",
+                str(tmp_path / "o.png")]
+        assert cli.main(argv) == 2
+        (line,) = _err_lines(capsys)
+        assert said in line and str(tmp_path / over) in line and "runs along" not in line
+        assert not (tmp_path / "o.png").exists()
+
+
+@pytest.mark.parametrize("content, said", [(b"hi\n", "text"), (b"", "empty")])
+def test_a_file_that_is_not_netcdf_is_said_in_a_short_line(content, said, tmp_path, capsys):
+    """A text or empty file given to plot: one short line saying what it is, not
+    xarray's advice on IO engines."""
+    path = tmp_path / "text.nc"
+    path.write_bytes(content)
+    assert cli.main(["plot", str(path), "--output", str(tmp_path / "p.png")]) == 2
+    (line,) = _err_lines(capsys)
+    assert line.startswith(f"harvester-sweep: error: {path}: ") and said in line
+    assert "engine" not in line and len(line) < 100 + len(str(path))
+
+
+def test_basins_where_no_start_reached_an_orbit_say_so():
+    """Three periods settle no start: the impact basin fraction is NaN (unknown) at both
+    points of the line and the single point; the line drew an empty frame around 0 Hz and
+    the point empty bars. Both now say why, and the line marks each point at its foot."""
+    line = basin_map({"frequency": [240.0, 250.0]}, samples=4, steps_per_period=512,
+                     max_periods=3, progress=False)
+    point = line.isel(frequency=0)
+    for ds in (line, point):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            ax = plot_basins(ds).axes[0]
+        said = [t.get_text() for t in ax.texts if t.get_gid() == "no value"]
+        assert said == ["no start reached an orbit: up to 100% not settled"]
+    marks = [m for m in plot_basins(line).axes[0].get_lines() if m.get_gid() == "no orbit"]
+    assert len(marks) == 1 and list(marks[0].get_xdata()) == [240.0, 250.0]
