@@ -341,11 +341,10 @@ def _measure(packed, successors, estimated, setup: float) -> Sample:
         & (run >= rows[:, PARAM.max_periods]) \
         & (budget > rows[:, PARAM.max_periods])
     more = np.where(short, budget / np.maximum(run, 1.0), 1.0)
-    cut = int(short.sum())
-    cut_short = (f"{cut} of {len(short)} sampled points did not "
-                 f"settle within the sample's {rows[short, PARAM.max_periods].min():.0f} "
-                 f"period{'s' if rows[short, PARAM.max_periods].min() > 1 else ''} and "
-                 "are counted at their whole budget (max_periods)" if cut else "")
+    cut, given = int(short.sum()), rows[short, PARAM.max_periods]
+    cut_short = (f"{cut} of {len(short)} sampled points did not settle within the "
+                 f"sample's {given.min():.0f} period{'s' if given.min() > 1 else ''} and are "
+                 "counted at their whole budget (max_periods)" if cut else "")
     rate, rating = _engine_rate(rows, orbits.finals, packed.refused)
     import numba
 
