@@ -211,11 +211,13 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
         raise ParameterError(f"{parameter}: continued, so it cannot also be fixed; give start "
                              "and stop instead")
     # (the stop must be a point of the model too, or the branch ends short of it unsaid)
+    resolved = {}
     for end, value in (("stop", stop), ("start", start)):
         try:
-            p = resolve_beam_parameters(preset, **overrides, **{parameter: value})
+            resolved[end] = resolve_beam_parameters(preset, **overrides, **{parameter: value})
         except ParameterError as error:
             raise ParameterError(f"{end}: {error}") from None
+    p = resolved["start"]
     first = solve_beam([p])
     if first.values["status"][0] != 0 or first.values["orbit_period"][0] != 1:
         raise NoOrbitError(f"{parameter} = {start:g}: the start has no settled orbit of "

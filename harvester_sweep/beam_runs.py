@@ -803,17 +803,15 @@ def beam_scene(preset: str | None = DEFAULT_BEAM_PRESET, periods: int = 2,
     pk = pack_beam(p, bs, steps, float(sol.values["contact_step"][0]))
     S = len(bs.system.surfaces)
     names = bs.system.output_names
+    rec = np.empty((0, 1 + S + len(names)))  # (a diverged point has no orbit to record)
     rows = periods * (steps + 4096) + 16  # (grown until the record fits: never cut short)
-    while True:
-        if sol.values["status"][0] == _DIVERGED:  # (no orbit: nothing to record)
-            rec = np.empty((0, 1 + S + len(names)))
-            break
+    while sol.values["status"][0] != _DIVERGED:
         rec = modal_map.record_motion(pk, sol.ends[0], periods, rows)
         if len(rec) < rows:
             break
         rows *= 4
     col = {name: 1 + S + k for k, name in enumerate(names)}
-    t = rec[:, 0] - rec[:1, 0].sum()  # (from the orbit's start; empty if none)
+    t = rec[:, 0] - (rec[0, 0] if len(rec) else 0.0)  # (from the orbit's start)
     series = xr.Dataset(
         {"tip_displacement": ("time", rec[:, col["tip_displacement"]],
                               {"units": "m", "long_name": "tip displacement relative to the "

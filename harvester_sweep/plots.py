@@ -608,9 +608,8 @@ def plot_basins(ds, path=None, scales=None) -> Figure:
                     marker="o", ms=3, capsize=2, lw=1.0)
         lost = ~np.isfinite(ds[name].values)  # (no start reached an orbit: unknown)
         if lost.any():
-            ax.plot(values[lost] / scale, np.full(int(lost.sum()), 0.04), ls="none",
-                    marker="x", color="k", transform=ax.get_xaxis_transform(),
-                    gid="no orbit", label=f"no start reached an orbit ({int(lost.sum())})")
+            _at_foot(ax, values[lost] / scale, ls="none", marker="x", color="k",
+                     gid="no orbit", label=f"no start reached an orbit ({int(lost.sum())})")
             ax.legend(fontsize="small")
         ax.set_ylim(-0.03, 1.03)
         ax.set_ylabel(_label(ds, name))
@@ -633,10 +632,8 @@ def plot_basins(ds, path=None, scales=None) -> Figure:
         lost = [f"{float(np.max(ds[what].values)):.0%} {what.replace('fraction_', '')}"
                 .replace("_", " ") for what in ("fraction_not_settled", "fraction_diverged")
                 if float(np.max(ds[what].values)) > 0]
-        ax.text(0.5, 0.5, "no start reached an orbit" + (f": up to {', '.join(lost)}"
-                                                          if lost else ""),
-                transform=ax.transAxes, ha="center", va="center", gid="no value",
-                bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="none", alpha=0.8))
+        _panel_note(ax, "no start reached an orbit" + (f": up to {', '.join(lost)}"
+                                                        if lost else ""))
     _no_offset(ax)
     starts = (f"base shock {ds.attrs['shock']:g} m/s" if "shock" in ds.attrs
               else "starts in a box around rest")
@@ -696,9 +693,20 @@ def _say_no_value(ax, ds, name: str) -> None:
     unsettled = [(s, int(np.sum(status == STATUS_NAMES.index(s)))) for s in _UNSETTLED]
     said = ", ".join(f"{s} ({count} of {status.size})" for s, count in unsettled if count)
     why = said or (OUTPUTS[name].comment if name in OUTPUTS else "")
-    ax.text(0.5, 0.5, f"no point has a value of {name}" + (f": {why}" if why else ""),
-            transform=ax.transAxes, ha="center", va="center", wrap=True, gid="no value",
-            bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="none", alpha=0.8))
+    _panel_note(ax, f"no point has a value of {name}" + (f": {why}" if why else ""))
+
+
+def _panel_note(ax, text: str) -> None:
+    """``text`` across the middle of panel ``ax``: why it holds no data (gid "no value")."""
+    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", wrap=True,
+            gid="no value", bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="none",
+                                      alpha=0.8))
+
+
+def _at_foot(ax, x, **style) -> None:
+    """Markers at ``x`` (data units) at the foot of panel ``ax``: points with no value to
+    be drawn at, placed along the axis all the same."""
+    ax.plot(x, np.full(len(x), 0.04), transform=ax.get_xaxis_transform(), **style)
 
 
 def _plot_lines(ds, axis: str, scales=None) -> Figure:
@@ -824,9 +832,7 @@ def _mark_unsettled(ax, status, x, y, legend: bool = True, where: str = "") -> N
                 label = "_" + label  # (counted once in the legend)
             unplaced = mask & ~placed
             if unplaced.any():
-                ax.plot(x[unplaced], np.full(int(unplaced.sum()), 0.04), label=label,
-                        transform=ax.get_xaxis_transform(), gid=f"{name}, no value",
-                        **style)
+                _at_foot(ax, x[unplaced], label=label, gid=f"{name}, no value", **style)
             marked = True
     if marked and legend:
         ax.legend(fontsize="small", loc="upper right", framealpha=0.8)
