@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import numbers
 import sys
 from dataclasses import dataclass, fields, replace
 
@@ -51,6 +50,7 @@ from .parameters import (
     check_seed,
     is_number,
     resolve_parameters,
+    whole_number,
 )
 from .results import solve
 from .run_estimate import announce, estimate_basins
@@ -319,12 +319,7 @@ def basin_map(grid: dict | BasinSpec, preset: str | None = DEFAULTS["preset"],
 
 def check_draws(samples, seed, box, shock):
     """The draw options, checked (ParameterError naming the one out of range)."""
-    # (numpy's integers are integers: is_number refuses bools, numbers.Integral floats)
-    if not (is_number(samples) and isinstance(samples, numbers.Integral)) \
-            or not 1 <= samples <= MAX_SAMPLES:
-        raise ParameterError(f"samples [-] = {samples!r}: must be an integer in 1 .. "
-                             f"{MAX_SAMPLES:,}")
-    samples, seed = int(samples), check_seed(seed)
+    samples, seed = whole_number("samples", samples, 1, MAX_SAMPLES), check_seed(seed)
     if shock is not None:
         if box is not None:
             raise ParameterError("box and shock: give one, the starts are drawn from a box "

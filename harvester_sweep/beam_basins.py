@@ -23,7 +23,7 @@ from .beam_packing import first_steps, pack_beam
 from .beam_parameters import DEFAULT_BEAM_PRESET, resolve_beam_parameters
 from .beam_runs import solve_beam, system_of
 from .outputs import OUTPUTS
-from .parameters import ParameterError, check_seed
+from .parameters import ParameterError, check_seed, is_number, whole_number
 from .version import __version__
 
 #: Two orbits are one attractor where their strobes agree within this fraction of each
@@ -40,9 +40,8 @@ def beam_basins(preset: str | None = DEFAULT_BEAM_PRESET, samples: int = 64, see
     that reach each (``box``: the half-width of the box of starts around the linear
     steady state, in units of the first mode's linear amplitude and rate [-]). Returns a
     CF dataset over ``attractor`` (and the starts over ``sample``)."""
-    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
-        raise ParameterError(f"samples [-] = {samples!r}: must be an integer >= 1")
-    if not (isinstance(box, (int, float)) and math.isfinite(box) and box > 0):
+    samples = whole_number("samples", samples, 1)
+    if not (is_number(box) and math.isfinite(box) and box > 0):
         raise ParameterError(f"box [-] = {box!r}: must be a finite number > 0")
     seed = check_seed(seed)
     p = resolve_beam_parameters(preset, **overrides)

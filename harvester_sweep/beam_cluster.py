@@ -13,7 +13,6 @@ or the interruptions.
 
 from __future__ import annotations
 
-import numbers
 import sys
 from types import SimpleNamespace
 
@@ -23,7 +22,7 @@ from .beam_parameters import DEFAULT_BEAM_PRESET, moving_stop
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import beam_chunk, chunk_points
 from .cluster import check_scheduler
-from .parameters import ParameterError, is_number, value_text
+from .parameters import ParameterError, whole_number
 from .sweep_file import load_sweep
 
 
@@ -33,7 +32,7 @@ def check_cluster(workers, scheduler):
     if workers is not None and scheduler is not None:
         raise ParameterError("give workers or scheduler, not both")
     if workers is not None:
-        workers = _whole("workers", workers)
+        workers = whole_number("workers", workers, 1)
     if scheduler is not None:
         check_scheduler(scheduler)
     return workers
@@ -49,7 +48,7 @@ def beam_source(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions
     sweep = {"directions": list(directions)} if directions else {}
     if chunk_size is not None:
         length = len(axes.get("frequency", ())) if directions else 1
-        sweep["chunk_size"] = _whole("chunk_size", chunk_size) * max(length, 1)
+        sweep["chunk_size"] = whole_number("chunk_size", chunk_size, 1) * max(length, 1)
     return {"model": "beam", "preset": preset or DEFAULT_BEAM_PRESET, "parameters": fixed,
             "grid": {name: np.asarray(values) for name, values in axes.items()},
             "sweep": sweep}
@@ -240,12 +239,6 @@ def _size(spec, remaining: int) -> str:
     todo = "" if remaining == spec.n_points else f" ({remaining:,} still to run)"
     return (f"{spec.n_points:,} beam point{'s' if spec.n_points != 1 else ''}{todo} in "
             f"{spec.n_chunks:,} chunk{'s' if spec.n_chunks != 1 else ''}")
-
-
-def _whole(name: str, value) -> int:
-    if not is_number(value) or not isinstance(value, numbers.Integral) or value < 1:
-        raise ParameterError(f"{name} [-] = {value_text(value)}: must be an integer >= 1")
-    return int(value)
 
 
 __all__ = ["beam_dataset", "beam_source", "check_cluster", "run_beam_file", "run_beam_sweep"]

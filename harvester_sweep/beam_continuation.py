@@ -34,7 +34,7 @@ from .beam_runs import (
 from .continuation import NoOrbitError
 from .datasets import multiplier_coordinate
 from .outputs import BIFURCATION_FLAGS, BIFURCATIONS, OUTPUTS
-from .parameters import ParameterError
+from .parameters import ParameterError, is_number, whole_number
 from .period_map import multiplier_shift, sorted_multipliers
 from .version import __version__
 
@@ -176,8 +176,9 @@ def _tangent(jac: np.ndarray, previous=None) -> np.ndarray:
 
 
 def check_branch(parameter: str, start: float, stop: float, step: float,
-                 max_points: int) -> None:
-    """Refuse, in one line, a branch's options out of their ranges."""
+                 max_points: int) -> int:
+    """Refuse, in one line, a branch's options out of their ranges; returns max_points as
+    an int."""
     if parameter not in BEAM_PARAMETERS or BEAM_PARAMETERS[parameter].kind != "float":
         raise ParameterError(f"parameter {parameter!r}: must be a real beam parameter")
     for value in (start, stop):
@@ -186,10 +187,9 @@ def check_branch(parameter: str, start: float, stop: float, step: float,
         unit = BEAM_PARAMETERS[parameter].unit
         raise ParameterError(f"stop [{unit}] = {stop!r}: must differ from start, the branch's "
                              "direction")
-    if not (isinstance(step, float) and 0 < step <= 0.2):
+    if not (is_number(step) and 0 < step <= 0.2):
         raise ParameterError(f"step [-] = {step!r}: must be a number in (0, 0.2]")
-    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
-        raise ParameterError(f"max_points [-] = {max_points!r}: must be an integer >= 2")
+    return whole_number("max_points", max_points, 2)
 
 
 def continue_beam_branch(parameter: str, start: float, stop: float,
@@ -203,7 +203,7 @@ def continue_beam_branch(parameter: str, start: float, stop: float,
     doublings, "switch" also follows each doubled branch (orbits of twice the periods, up
     to MAX_PERIODS) within the range. Returns a CF dataset over ``point``, the branches
     one after another (``branch``, ``orbit_period``)."""
-    check_branch(parameter, start, stop, step, max_points)
+    max_points = check_branch(parameter, start, stop, step, max_points)
     if period_doubling not in ("mark", "switch"):
         raise ParameterError(f"period_doubling [-] = {period_doubling!r}: must be 'mark' or "
                              "'switch'")

@@ -68,7 +68,6 @@ from __future__ import annotations
 
 import copy
 import math
-import numbers
 import time
 import warnings
 from dataclasses import dataclass, field, replace
@@ -88,6 +87,7 @@ from .parameters import (
     check_names,
     is_number,
     resolve_parameters,
+    whole_number,
 )
 from .period_map import (
     CENTRAL,
@@ -572,10 +572,7 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
     if not min_step <= step <= max_step:
         raise ParameterError(f"{prefix}step [-] = {step!r}: must lie in [min_step, max_step] = "
                              f"[{min_step!r}, {max_step!r}]")
-    if not (is_number(max_points) and isinstance(max_points, numbers.Integral)) \
-            or not 2 <= max_points <= 10**6:
-        raise ParameterError(f"{prefix}max_points [-] = {max_points!r}: must be an integer in "
-                             "[2, 1000000]")
+    max_points = whole_number(f"{prefix}max_points", max_points, 2, 10**6)
     if period_doubling not in PERIOD_DOUBLING:
         raise ParameterError(f"{prefix}period_doubling = {period_doubling!r}: must be one of "
                              + ", ".join(f'"{m}"' for m in PERIOD_DOUBLING))
@@ -598,7 +595,7 @@ def check_continuation(preset, parameter, start, stop, step, min_step, max_step,
         preset=preset, fixed={k: v for k, v in fixed.items() if k != "steps_per_period"},
         parameter=parameter, start=ends["start"], stop=ends["stop"], steps=int(steps),
         step=float(step), min_step=float(min_step), max_step=float(max_step),
-        max_points=int(max_points), switch=period_doubling == "switch",
+        max_points=max_points, switch=period_doubling == "switch",
         base=at_steps[0],  # (samples[0] is start itself)
         accuracy=float(accuracy), max_steps=float(base["max_steps_per_period"]))
 

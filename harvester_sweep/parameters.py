@@ -123,12 +123,27 @@ def is_number(value) -> bool:
 MAX_SEED = 2**63 - 1
 
 
+def whole_number(name: str, value, low: int, high: int | None = None) -> int:
+    """``value`` as an int where it is a whole number in ``low`` .. ``high`` (no upper
+    bound: None), or ParameterError in one line naming ``name`` [-]. It takes what the
+    parameter table takes for an integer: Python's or numpy's integers, and a float of
+    whole value (TOML reads ``1e3`` as 1000.0); never a bool."""
+    number = None
+    if is_number(value):
+        if isinstance(value, numbers.Integral):
+            number = int(value)
+        else:
+            number = float(value)
+            number = int(number) if math.isfinite(number) and number.is_integer() else None
+    if number is None or number < low or (high is not None and number > high):
+        bounds = f">= {low}" if high is None else f"in {low} .. {high:,}"
+        raise ParameterError(f"{name} [-] = {value_text(value)}: must be an integer {bounds}")
+    return number
+
+
 def check_seed(seed) -> int:
     """A seed of numpy's default generator, checked (ParameterError in one line)."""
-    # (numpy's integers are integers: is_number refuses bools, numbers.Integral floats)
-    if not (is_number(seed) and isinstance(seed, numbers.Integral)) or not 0 <= seed <= MAX_SEED:
-        raise ParameterError(f"seed [-] = {value_text(seed)}: must be an integer in 0 .. 2^63 - 1")
-    return int(seed)
+    return whole_number("seed", seed, 0, MAX_SEED)
 
 
 def value_text(value) -> str:

@@ -10,7 +10,6 @@ the chunks missing or damaged. The netCDF file is written aside and renamed when
 
 from __future__ import annotations
 
-import numbers
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
@@ -18,7 +17,7 @@ from tqdm import tqdm
 
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import chunk_points, compute_chunk, prepare_chunk
-from .parameters import ParameterError, is_number, value_text
+from .parameters import ParameterError, whole_number
 from .run_estimate import announce, sweep_estimate
 from .sweep_file import load_sweep
 
@@ -81,9 +80,7 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     if workers is not None and scheduler is not None:
         raise ParameterError("give workers or scheduler, not both")
     if workers is not None:
-        if not is_number(workers) or not isinstance(workers, numbers.Integral) or workers < 1:
-            raise ParameterError(f"workers [-] = {value_text(workers)}: must be an integer >= 1")
-        workers = int(workers)
+        workers = whole_number("workers", workers, 1)
     if scheduler is not None:
         from .cluster import check_scheduler
 

@@ -33,7 +33,6 @@ import hashlib
 import itertools
 import json
 import math
-import numbers
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,6 +49,7 @@ from .parameters import (
     is_number,
     resolve_parameters,
     value_text,
+    whole_number,
 )
 
 if sys.version_info >= (3, 11):
@@ -470,11 +470,12 @@ def check_grid_size(grid: dict, per_point: int = 1, what: str = "points") -> Non
     lengths, a range's ``num`` or a list's length. An axis of another shape is left to
     :func:`axis` to refuse."""
     sizes = []
-    for entry in grid.values():
+    for key, entry in grid.items():
         if isinstance(entry, dict):
-            num = entry.get("num")
-            if is_number(num) and isinstance(num, numbers.Integral) and num >= 1:
-                sizes.append(int(num))
+            try:
+                sizes.append(whole_number(f"{key}.num", entry.get("num"), 1))
+            except ParameterError:  # (refused with its axis)
+                pass
         elif isinstance(entry, (list, tuple, np.ndarray)):
             sizes.append(len(entry))
     count = math.prod(sizes) * per_point
@@ -578,12 +579,7 @@ def _range(key: str, entry: dict) -> np.ndarray:
             raise ParameterError(f"{key}.{part} = {value_text(value)}: must be a finite number")
         ends.append(number)
     start, stop = ends
-    num = entry["num"]
-    if not is_number(num) or not isinstance(num, numbers.Integral) \
-            or not 1 <= num <= MAX_AXIS_POINTS:
-        raise ParameterError(f"{key}.num = {value_text(num)}: must be an integer in "
-                             f"[1, {MAX_AXIS_POINTS:.0e}]")
-    num = int(num)
+    num = whole_number(f"{key}.num", entry["num"], 1, MAX_AXIS_POINTS)
     scale = entry.get("scale", "linear")
     if scale == "linear":
         with np.errstate(over="ignore", invalid="ignore"):  # (stop - start beyond a double:
@@ -619,10 +615,7 @@ def _string_list(options: dict, key: str, allowed, default) -> list:
 
 
 def _integer(options: dict, key: str, default: int) -> int:
-    value = options.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ParameterError(f"sweep.{key} = {value_text(value)}: must be an integer >= 1")
-    return value
+    return whole_number(f"sweep.{key}", options.get(key, default), 1)
 
 
 def _check_corners(spec: SweepSpec) -> None:

@@ -510,3 +510,39 @@ def test_a_branch_stops_where_the_period_map_is_the_identity_and_flags_no_far_gr
     grazing = list(ds["bifurcation"].attrs["flag_meanings"].split()).index("grazing")
     for i in np.flatnonzero(ds["bifurcation"].values == grazing):
         assert abs(float(ds["x_max"][i]) - gap) < 1e-3 * gap, float(ds["x_max"][i])
+
+
+# -- an integer option takes what the parameter table takes: 8, 8.0 and numpy's 8 ---------
+
+def test_a_sweep_files_counts_take_whole_floats_as_its_parameters_do():
+    def sweep(num, samples, chunk_size):
+        return load_sweep({"parameters": {"max_periods": 400.0},  # (a parameter's int)
+                           "grid": {"frequency": {"start": 200.0, "stop": 260.0, "num": num}},
+                           "sweep": {"outputs": ["power", "strobe"], "samples": samples,
+                                     "chunk_size": chunk_size}})
+
+    as_int, as_float = sweep(3, 8, 2), sweep(3.0, 8.0, np.float32(2.0))
+    assert (as_float.samples, as_float.chunk_size) == (as_int.samples, as_int.chunk_size) == (8, 2)
+    assert type(as_float.samples) is int and type(as_float.chunk_size) is int
+    np.testing.assert_array_equal(as_float.grid["frequency"], [200.0, 230.0, 260.0])
+    for bad in (dict(num=2.5), dict(samples=8.5), dict(chunk_size=True)):
+        with pytest.raises(ParameterError, match=r"(num|samples|chunk_size) \[-\] = .*must be "
+                                                 r"an integer"):
+            sweep(**{"num": 3, "samples": 8, "chunk_size": 2, **bad})
+
+
+def test_the_beam_commands_take_numpy_counts(monkeypatch):
+    from harvester_sweep import beam_basins
+    from harvester_sweep.beam_continuation import check_branch
+
+    taken = check_branch("frequency", 100.0, 120.0, np.float32(0.05), np.int64(40))
+    assert taken == 40 and type(taken) is int
+    assert check_branch("frequency", 100.0, 120.0, 0.05, 40.0) == 40
+    with pytest.raises(ParameterError, match=r"max_points \[-\] = 40.5: must be an integer"):
+        check_branch("frequency", 100.0, 120.0, 0.05, 40.5)
+    monkeypatch.setattr(beam_basins, "resolve_beam_parameters",
+                        lambda *a, **k: (_ for _ in ()).throw(_Taken))
+    with pytest.raises(_Taken):  # (the draws' options were accepted)
+        beam_basins.beam_basins(samples=np.int64(4), seed=np.uint16(3), box=np.float32(1.5))
+    with pytest.raises(ParameterError, match=r"box \[-\] = True: must be a finite number"):
+        beam_basins.beam_basins(samples=4, box=True)

@@ -272,7 +272,7 @@ BAD = [
     ('[grid]\ngap = [1e-6]\n[sweep]\ndirections = ["up"]\n',
      ["sweep.directions", "frequency"]),
     ('preset = "paper"\n[grid]\nfrequency = [230.0]\n', ["preset 'paper'", "bimorph_tip"]),
-    ('[grid]\nfrequency = [230.0]\n[sweep]\nchunk_size = 0\n', ["sweep.chunk_size = 0"]),
+    ('[grid]\nfrequency = [230.0]\n[sweep]\nchunk_size = 0\n', ["sweep.chunk_size [-] = 0"]),
 ]
 IDS = ["n_modes_9", "unknown_name", "axis_value", "range_below", "choice_axis",
        "contact_beyond_length", "tip_mass_option", "direction_without_frequency",

@@ -326,8 +326,8 @@ BAD = [
     ({"grid": {"frequency": [140.0]}, "sweep": {"outputs": []}}, "sweep.outputs: must be"),
     ({"grid": {"frequency": [140.0]}, "sweep": {"samples": 8}}, "sweep.samples: stroboscopic"),
     ({"grid": {"frequency": [140.0]}, "sweep": {"outputs": ["strobe"], "samples": 0}},
-     "sweep.samples = 0"),
-    ({"grid": {"frequency": [140.0]}, "sweep": {"chunk_size": 0}}, "sweep.chunk_size = 0"),
+     "sweep.samples [-] = 0"),
+    ({"grid": {"frequency": [140.0]}, "sweep": {"chunk_size": 0}}, "sweep.chunk_size [-] = 0"),
     ({"grid": {"frequency": [140.0]}, "preset": "nope"}, "preset 'nope' is unknown"),
 ]
 
