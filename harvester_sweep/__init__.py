@@ -5,6 +5,10 @@ the engine (``_engine``, private) -> results -> datasets (xarray, CF netCDF) -> 
 the command line. The registry of outputs (``outputs``) names every metric and status.
 """
 
+from .environment import check_threads
+
+check_threads()  # (before numba is imported: numba's import fails on a bad thread count)
+
 from .basins import basin_fractions, basin_map
 from .continuation import NoOrbitError, continue_branch
 from .outputs import OUTPUTS, STATUSES
