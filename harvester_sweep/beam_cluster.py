@@ -21,21 +21,9 @@ import numpy as np
 from .beam_parameters import DEFAULT_BEAM_PRESET, moving_stop
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import beam_chunk, chunk_points
-from .cluster import check_scheduler
+from .cluster import check_cluster
 from .parameters import ParameterError, whole_number
 from .sweep_file import load_sweep
-
-
-def check_cluster(workers, scheduler):
-    """Refuse, in one line, ``workers`` and ``scheduler`` together, a worker count that is
-    not a whole number >= 1 or an address dask cannot parse; returns the worker count."""
-    if workers is not None and scheduler is not None:
-        raise ParameterError("give workers or scheduler, not both")
-    if workers is not None:
-        workers = whole_number("workers", workers, 1)
-    if scheduler is not None:
-        check_scheduler(scheduler)
-    return workers
 
 
 def beam_source(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
@@ -241,4 +229,4 @@ def _size(spec, remaining: int) -> str:
             f"{spec.n_chunks:,} chunk{'s' if spec.n_chunks != 1 else ''}")
 
 
-__all__ = ["beam_dataset", "beam_source", "check_cluster", "run_beam_file", "run_beam_sweep"]
+__all__ = ["beam_dataset", "beam_source", "run_beam_file", "run_beam_sweep"]

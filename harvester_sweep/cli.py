@@ -998,7 +998,8 @@ def _beam_sweep(args) -> int:
 def _run_beam_spec(spec, args) -> int:
     """A checked beam sweep run as ``args`` (of beam-sweep or run) say: its chunks kept in
     OUT.nc.partial/ as they finish, a summary of its statuses on stderr."""
-    from .beam_cluster import check_cluster, run_beam_file
+    from .beam_cluster import run_beam_file
+    from .cluster import check_cluster
     from .outputs import STATUSES
 
     check_cluster(args.workers, args.scheduler)

@@ -9,7 +9,7 @@ import os
 import time
 
 from .chunks import chunk_points, compute_chunk
-from .parameters import ParameterError, value_text
+from .parameters import ParameterError, value_text, whole_number
 
 #: Seconds the run waits with no worker on the cluster before it gives up [s]. A local
 #: worker that dies is started again by its nanny within seconds; a cluster with none for
@@ -23,6 +23,18 @@ POLL_SECONDS = 1.0
 class ClusterError(ParameterError):
     """The dask cluster cannot finish the chunks (its workers keep dying, or none is
     left); the finished chunks are kept for ``resume``."""
+
+
+def check_cluster(workers, scheduler):
+    """Refuse, in one line, ``workers`` and ``scheduler`` together, a worker count that is
+    not a whole number >= 1 or an address dask cannot parse; returns the worker count."""
+    if workers is not None and scheduler is not None:
+        raise ParameterError("give workers or scheduler, not both")
+    if workers is not None:
+        workers = whole_number("workers", workers, 1)
+    if scheduler is not None:
+        check_scheduler(scheduler)
+    return workers
 
 
 def check_scheduler(scheduler) -> None:

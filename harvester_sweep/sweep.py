@@ -17,7 +17,7 @@ from tqdm import tqdm
 
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import chunk_points, compute_chunk, prepare_chunk
-from .parameters import ParameterError, whole_number
+from .parameters import ParameterError
 from .run_estimate import announce, sweep_estimate
 from .sweep_file import load_sweep
 
@@ -77,14 +77,9 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
     if output is not None and not str(output).lower().endswith(".nc"):
         raise ParameterError(f"output = {str(output)!r}: the file name must end in .nc (the "
                              "file is netCDF)")
-    if workers is not None and scheduler is not None:
-        raise ParameterError("give workers or scheduler, not both")
-    if workers is not None:
-        workers = whole_number("workers", workers, 1)
-    if scheduler is not None:
-        from .cluster import check_scheduler
+    from .cluster import check_cluster
 
-        check_scheduler(scheduler)
+    workers = check_cluster(workers, scheduler)
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
     with store:  # (holds the output's lock until the file is written)
         if store.complete:
