@@ -112,6 +112,11 @@ BIFURCATION_FLAGS = {"flag_values": np.arange(len(BIFURCATIONS), dtype="i1"),
 
 _NO_IMPACT = "NaN when the orbit has no impact (impacts_per_period = 0)"
 _NOT_SETTLED = "NaN where the point did not settle"
+_PEAK = ("the vertex of the parabola through the force at three step ends: its error falls "
+         "about as the step squared, is not in error_estimate and is far larger "
+         "(docs/numerics.md)")
+_APPROACH = ("not in error_estimate: at a slow impact its error can be far larger "
+             "(docs/numerics.md)")
 _OUTPUTS = (
     # the engine's metric row, in its order
     Output("power", "W", "mean electrical power V_rms^2/R over the orbit"),
@@ -120,14 +125,14 @@ _OUTPUTS = (
     Output("power_peak", "W", "peak instantaneous electrical power v_peak^2/R"),
     Output("x_max", "m", "largest tip displacement (positive towards the stop)"),
     Output("x_min", "m", "smallest tip displacement"),
-    Output("contact_force_max", "N", "peak contact force of the (upper) stop"),
+    Output("contact_force_max", "N", "peak contact force of the (upper) stop", comment=_PEAK),
     Output("impacts_per_period", "1", "impacts on the (upper) stop per forcing period"),
     Output("approach_velocity", "m/s", "mean tip velocity at first touch of the (upper) stop",
-           comment=_NO_IMPACT),
+           comment=f"{_NO_IMPACT}; {_APPROACH}"),
     Output("impacts_per_period_lower", "1", "impacts on the lower stop per forcing period "
            "(0 without one)"),
     Output("contact_force_max_lower", "N", "peak contact force of the lower stop (0 without "
-           "one)"),
+           "one)", comment=_PEAK),
     Output("stop_displacement_max", "m", "largest displacement |x_s| of the (upper) stop "
            "relative to the base (0 for a rigid stop)"),
     Output("contact_force_spread", "N", "impact-to-impact spread of the (upper) stop's peak "
@@ -140,7 +145,7 @@ _OUTPUTS = (
            comment="NaN where every swing touches, or without a rigid stop"),
     Output("approach_velocity_min", "m/s", "smallest tip velocity relative to the stop at "
            "the first touch of an impact over the orbit, either stop (0 at a grazing)",
-           comment="NaN when the orbit has no impact on either stop"),
+           comment=f"NaN when the orbit has no impact on either stop; {_APPROACH}"),
     Output("orbit_period", "1", "forcing periods per orbit (0 when not settled)", "int32"),
     Output("status", "1", "outcome of the run", "int8",
            comment="; ".join(f"{s.code} {s.name}: {s.meaning}" for s in STATUSES)),
