@@ -59,7 +59,10 @@ class SceneResult:
         the orbit has no impact; ``error_estimate`` (step halving, see
         ``orbits.halving_error``) is None when the point did not settle.
     state : numpy.ndarray
-        State ``(x [m], v [m/s], V [V], v_imp [m/s])`` at the last period boundary.
+        State at the last period boundary, in the engine's order (``_engine.STATE``):
+        ``(x [m], v [m/s], voltage [V], stop_x [m], stop_v [m/s], approach_velocity [m/s])``,
+        the stop's 0 for a rigid stop and the approach velocity the one latched at the
+        last first touch.
     notes : list of str
         Assumptions of the preset.
     """
