@@ -15,6 +15,7 @@ import numpy as np
 
 from . import bimorph as _bimorph
 from . import rod as _rod
+from ._engine import NO_STOP
 from .beam_parameters import bimorph, contact_position, rod
 from .contact import contact_damping
 from .modal_map import ModalPoint, pack
@@ -60,14 +61,19 @@ def beam_system(p: dict) -> BeamSystem:
     rm = None if stop is None else _rod_modes(stop, p["rod_modes"])
     n = p["n_modes"]
     strain = (beam.substrate_thickness / 2 + beam.piezo_thickness) * modes.root_curvature
+    # (hertz_stiffness 0 is no stop, as for the tip mass: its surfaces placed beyond any
+    # motion, so that no touch is counted)
+    stops = p["hertz_stiffness"] > 0
     system = beam_model.modal_system(
         omega=modes.omega,
         zeta=(np.full(n, p["damping_ratio"]) if p["mode_damping_ratios"] is None
               else np.array(p["mode_damping_ratios"])), chi=modes.coupling,
         gamma=modes.forcing, phi_tip=modes.tip,
         phi_contact=modes.shape(contact_position(p))[:, 0], root_strain=strain,
-        capacitance=beam.capacitance, resistance=p["resistance"], gap=p["gap"],
-        lower_gap=p["lower_gap"], **_stop(p, rm))
+        capacitance=beam.capacitance, resistance=p["resistance"],
+        gap=p["gap"] if stops else NO_STOP,
+        lower_gap=p["lower_gap"] if stops or p["lower_gap"] is None else NO_STOP,
+        **_stop(p, rm))
     ch = (p["contact_damping"] if p["contact_damping"] is not None
           else contact_damping(p["contact_law"], p["restitution"], p["impact_velocity"]))
     linear = _linear_amplitudes(p, system)
@@ -139,7 +145,10 @@ def first_steps(p: dict, bs: BeamSystem) -> tuple[int, float]:
 def contact_duration(p: dict, bs: BeamSystem) -> float:
     """Estimated duration [s] of an impact: the undamped Hertz contact of the contact
     point's apparent mass (1 / sum of the squared mode shapes there, the beam's and the
-    rod's) at the approach velocity of the linear response's amplitude there."""
+    rod's) at the approach velocity of the linear response's amplitude there; a forcing
+    period where hertz_stiffness is 0 (no stop: the sub-step then serves no contact)."""
+    if p["hertz_stiffness"] == 0:
+        return 1.0 / p["frequency"]
     surface = bs.system.surfaces[0]
     mass = 1.0 / float(np.sum(surface ** 2))
     omega = 2 * math.pi * p["frequency"]

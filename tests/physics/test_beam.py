@@ -48,6 +48,23 @@ def test_without_contact_the_beam_is_its_modal_phasor_sum(n_modes, position, rat
     assert v["power"][0] == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]), rel=1e-9)
 
 
+@pytest.mark.parametrize("lower_gap", [None, 5e-7])
+def test_a_stop_of_no_stiffness_is_no_stop(lower_gap):
+    """hertz_stiffness 0 is no stop (the parameter table's word), as for the tip mass: at
+    the preset's 1-um gap, far inside the motion near resonance, the orbit is the modal
+    phasor sum and no impact is counted (it raised ZeroDivisionError estimating the
+    contact's duration)."""
+    p, sol = _solve(hertz_stiffness=0.0, frequency=150.0, lower_gap=lower_gap)
+    W, V = bm.modal_response(bimorph(p), p["frequency"], p["resistance"],
+                             n_modes=p["n_modes"], damping_ratio=p["damping_ratio"],
+                             amplitude=p["amplitude"])
+    v = sol.values
+    assert abs(W) > 5 * p["gap"]  # (the stop would be struck, were it one)
+    assert v["status"][0] == 0 and v["impacts_per_period"][0] == 0
+    assert v["x_max"][0] == pytest.approx(abs(W), rel=1e-9)
+    assert v["v_peak"][0] == pytest.approx(abs(V), rel=1e-9)
+
+
 def test_the_contact_free_map_and_its_reach_are_the_linear_systems():
     """Clear of the stop: the monodromy in closed form is SciPy's expm of the linear
     system over the periods; the reach that proves a motion never comes to the stop bounds
