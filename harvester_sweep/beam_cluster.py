@@ -13,7 +13,6 @@ or the interruptions.
 
 from __future__ import annotations
 
-import sys
 from types import SimpleNamespace
 
 import numpy as np
@@ -21,8 +20,10 @@ import numpy as np
 from .beam_parameters import DEFAULT_BEAM_PRESET, moving_stop
 from .chunk_store import ChunkStore, MemoryStore, load_computed, write_result
 from .chunks import beam_chunk, chunk_points
-from .cluster import check_cluster
+from .cluster import check_cluster, sweep_threads
 from .parameters import ParameterError, whole_number
+from .run_estimate import announce as announce_work
+from .run_estimate import beam_estimate
 from .sweep_file import load_sweep
 
 
@@ -45,23 +46,24 @@ def beam_source(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions
 def run_beam_sweep(axes: dict, preset: str | None = DEFAULT_BEAM_PRESET, directions=None,
                    progress=None, *, workers: int | None = None, scheduler: str | None = None,
                    chunk_size: int | None = None, output=None, resume: bool = False,
-                   **fixed):
+                   yes: bool = False, **fixed):
     """:func:`beam_runs.beam_sweep` (the same arguments and dataset, the frequency axis
     ascending where lines are swept) run in chunks by :func:`run_beam_file`: kept in
     ``output`` as they finish, resumable, on Dask with ``workers`` or ``scheduler``.
 
     ``chunk_size``: points per chunk of an unswept grid, lines per chunk of a swept one
     (default: a sweep file's, sweep_file.DEFAULT_BEAM_CHUNK_SIZE points, at least
-    DEFAULT_BEAM_CHUNK_LINES lines).
+    DEFAULT_BEAM_CHUNK_LINES lines). ``yes``: start a run estimated beyond an hour (see
+    run_beam_file).
     """
     return run_beam_file(beam_source(axes, preset, directions, chunk_size, **fixed), output,
                          resume=resume, progress=progress, workers=workers,
-                         scheduler=scheduler)
+                         scheduler=scheduler, yes=yes)
 
 
 def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
                   workers: int | None = None, scheduler: str | None = None,
-                  announce: bool = False):
+                  announce: bool = False, yes: bool = False):
     """Run a beam sweep and return its dataset (also written to ``output`` when given).
 
     Parameters
@@ -86,8 +88,12 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
         Run them on the running dask.distributed scheduler at this address (e.g.
         ``"tcp://127.0.0.1:8786"``); its workers must have harvester_sweep installed.
     announce : bool
-        Say the sweep's size on stderr before it starts (the command line's, unless
-        ``--quiet``).
+        Say the sweep's size and estimated run time on stderr before it starts (the size
+        alone for a grid below run_estimate.BEAM_SAMPLED_GRID points; the command
+        line's, unless ``--quiet``).
+    yes : bool
+        Start a sweep estimated to take longer than run_estimate.LONG_RUN_SECONDS (1 h);
+        without it such a sweep is refused before any work (the command line's ``--yes``).
 
     Returns
     -------
@@ -100,7 +106,8 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
     ParameterError
         Before anything is solved: a bad sweep, a partial result of another sweep, an
         output another run is writing, bad workers or scheduler, dask.distributed not
-        installed or a scheduler that cannot be reached.
+        installed or a scheduler that cannot be reached, a run estimated beyond an hour
+        without ``yes``.
     chunk_store.StoreError
         (a ParameterError) When the output or a chunk cannot be written; the finished
         chunks are kept for ``resume``.
@@ -120,11 +127,11 @@ def run_beam_file(sweep, output=None, *, resume: bool = False, progress=None,
         finished = {chunk for chunk in store.present() if store.has(chunk)}
         todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]
         remaining = sum(chunk_points(spec, chunk) for chunk in todo)
-        # What the run is, said before any work. The beam's run-time estimate (and, as
-        # run_sweep does, the refusal of a run beyond an hour unless confirmed) belongs
-        # here, from run_estimate, with ``spec``, ``remaining`` and the threads.
-        if announce:
-            print(f"harvester-sweep: {_size(spec, remaining)}", file=sys.stderr, flush=True)
+        # What the run is and how long it will take, said before any work; a run beyond
+        # an hour is refused unless confirmed
+        work = beam_estimate(spec, remaining, sweep_threads(workers, scheduler),
+                             _sample_solve)
+        announce_work(work, yes, announce, "make the grid coarser")
 
         def compute(chunks):
             if workers is None and scheduler is None:
@@ -213,6 +220,15 @@ class _Told:
         return self.store.kept_text()
 
 
+def _sample_solve(points: list, starts) -> tuple:
+    """A run-time estimate's sample solved as a sweep solves it: each point's periods_run
+    [-] and end state."""
+    from .beam_runs import solve_beam
+
+    solved = solve_beam(points, starts)
+    return solved.values["periods_run"], solved.ends
+
+
 def _what(spec, chunk: int) -> str:
     """A chunk in words: its points, or its direction, lines and frequencies."""
     lines = spec.chunk_lines(chunk)
@@ -220,13 +236,6 @@ def _what(spec, chunk: int) -> str:
         return f"{len(lines)} points"
     direction = spec.directions[lines[0] * len(spec.directions) // spec.n_lines]
     return f"{direction} sweep, {len(lines)} line(s) of {spec.line_length} frequencies"
-
-
-def _size(spec, remaining: int) -> str:
-    """The run's size in words: points, chunks, and what a resumed run has left."""
-    todo = "" if remaining == spec.n_points else f" ({remaining:,} still to run)"
-    return (f"{spec.n_points:,} beam point{'s' if spec.n_points != 1 else ''}{todo} in "
-            f"{spec.n_chunks:,} chunk{'s' if spec.n_chunks != 1 else ''}")
 
 
 __all__ = ["beam_dataset", "beam_source", "run_beam_file", "run_beam_sweep"]

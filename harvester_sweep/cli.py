@@ -119,7 +119,11 @@ def _parser() -> argparse.ArgumentParser:
     beam_sweep.add_argument("--resume", action="store_true",
                             help="finish an interrupted run from the chunks in "
                             "OUT.nc.partial/")
-    beam_sweep.add_argument("--quiet", action="store_true", help="no progress lines")
+    beam_sweep.add_argument("--quiet", action="store_true",
+                            help="no estimate and no progress lines")
+    beam_sweep.add_argument("--yes", action="store_true",
+                            help="start the sweep even when it is estimated to take more "
+                            "than an hour")
     beam_where = beam_sweep.add_mutually_exclusive_group()
     beam_where.add_argument("--workers", type=int, metavar="N",
                             help="solve the grid in chunks on a local dask cluster of N "
@@ -1008,7 +1012,8 @@ def _run_beam_spec(spec, args) -> int:
     try:
         ds = run_beam_file(spec, args.output, resume=args.resume,
                            progress=_beam_progress(args.quiet), workers=args.workers,
-                           scheduler=args.scheduler, announce=not args.quiet)
+                           scheduler=args.scheduler, announce=not args.quiet,
+                           yes=args.yes)
     except KeyboardInterrupt:
         print(f"harvester-sweep: interrupted; the finished chunks are kept in "
               f"{args.output}.partial/: run the same command with --resume to finish",

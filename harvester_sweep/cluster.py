@@ -151,6 +151,18 @@ def _workers(client) -> int:
         return 0
 
 
+def sweep_threads(workers: int | None, scheduler: str | None) -> int:
+    """Threads the sweep will run on: this process's numba threads, a LocalCluster's
+    cores, or 1 for a remote scheduler (its size is not known before connecting)."""
+    if scheduler is not None:
+        return 1
+    if workers is not None:
+        return workers * threads_per_worker(workers)
+    import numba
+
+    return numba.get_num_threads()
+
+
 def threads_per_worker(workers: int) -> int:
     """numba threads each of a LocalCluster's ``workers`` processes takes: they share the
     cores rather than oversubscribe them."""

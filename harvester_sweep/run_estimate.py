@@ -58,6 +58,10 @@ SEGMENT = 8
 #: RK4 steps of motion a sample point may run before it is counted as running its whole
 #: budget: bounds the sample's cost (a point that settles within it costs what it did) [-].
 SAMPLE_STEPS = 1_000_000
+#: The same bound for a beam sample point, in forcing periods (the beam's solver counts
+#: periods, each of its own many steps): the beam presets' budget, so that a point that
+#: never settles is timed as it will run [-].
+BEAM_SAMPLE_PERIODS = 2000
 #: The cost of one point in a round, as a share of the round's own cost (its Python and the
 #: engine call): a ratio of two Python costs, which a machine's speed changes alike; fitted
 #: on the benchmark grids and the frequency response (benchmarks/results/estimate_44.md) [-].
@@ -70,6 +74,11 @@ RATE_STEPS = 1_000_000
 #: the sample solves up to SAMPLE_POINTS of its points and times the engine, a good share
 #: of such a run, and more than the run itself on a grid of a few points [-].
 SAMPLED_GRID = 8 * SAMPLE_POINTS
+#: The same for a beam sweep, whose sample solves a chunk's worth of points (seconds),
+#: a tenth or less of a grid of this many [-].
+BEAM_SAMPLED_GRID = 1024
+#: A beam sample's points at the most [-].
+BEAM_SAMPLE_POINTS = 64
 #: The rate a small grid's budget is bounded at, a tenth of the nominal one: the solver's
 #: copies, error estimates and re-solves besides the motion, and a slow or loaded machine,
 #: fit in that margin [RK4 steps/s].
@@ -168,8 +177,8 @@ class RunEstimate:
         if math.isnan(self.seconds):
             return size
         counted = f" ({self.cut_short})" if self.cut_short else ""
-        return (f"{size}, "
-                f"about {self.steps:.2g} RK4 steps: roughly "
+        steps = "" if math.isnan(self.steps) else f" about {self.steps:.2g} RK4 steps:"
+        return (f"{size},{steps} roughly "
                 f"{duration(self.seconds)} on {self.threads} thread"
                 f"{'s' if self.threads > 1 else ''}{counted}")
 
@@ -232,6 +241,69 @@ def estimate_basins(spec, threads: int, starts_per_call: int) -> RunEstimate:
                        spec.samples, sample.cut_short)
 
 
+def beam_estimate(spec, remaining: int, threads: int, solve) -> RunEstimate:
+    """The expected time of ``remaining`` points of a beam sweep ``spec`` (a SweepSpec of
+    ``model = "beam"``) on ``threads`` threads (more than this process's numba threads:
+    chunks side by side on Dask workers).
+
+    The beam's solver lies in a layer above this module, so it comes as ``solve(points,
+    starts)``: the validated parameters of some points and the states they start from
+    (None: rest), returning each point's ``periods_run`` [-] and end state. A sample of
+    the grid is solved with it as the sweep solves it (:func:`_sample_index`: points from
+    rest, or runs of a line one frequency step at a time, each from the last one's orbit),
+    as many points a call as a chunk's calls hold (up to BEAM_SAMPLE_POINTS), so that the
+    solver's cost of a round is shared as in the run; each sample point's budget is cut to
+    BEAM_SAMPLE_PERIODS, and a point cut short is counted at its whole budget, as it will
+    run if it never settles. A point's expected time is the wall time of the sample's
+    points of its kind (from rest, or from a neighbour) per point. A grid of fewer than
+    BEAM_SAMPLED_GRID points is not sampled and says its size alone (``seconds`` NaN).
+    ``steps`` is NaN: the beam's solver counts periods, not RK4 steps."""
+    threads = max(1, threads)
+    if remaining <= 0 or spec.n_points < BEAM_SAMPLED_GRID:
+        return RunEstimate(spec.n_points, remaining, math.nan, threads,
+                           0.0 if remaining <= 0 else math.nan)
+    # (as many points a call as the chunks' calls hold: the solver's cost of a round,
+    # shared by its points, is then shared as in the run)
+    index, segment = _sample_index(spec, min(BEAM_SAMPLE_POINTS, spec.lines_per_chunk
+                                             * min(SEGMENT, spec.line_length)))
+    runs = index.reshape(-1, segment)  # (a run of a line per row)
+    # (a first point solved outside the timing loads the compiled engine's functions)
+    first = spec.point_parameters(spec.values_at(int(index[0])))
+    solve([dict(first, max_periods=min(first["max_periods"], BEAM_SAMPLE_PERIODS))], None)
+    ends, expected, cut, cap = None, np.zeros(2), 0, math.inf
+    for k in range(segment):
+        points = [spec.point_parameters(spec.values_at(int(i))) for i in runs[:, k]]
+        budget = np.array([p["max_periods"] for p in points], dtype=float)
+        given = np.minimum(budget, BEAM_SAMPLE_PERIODS)
+        began = time.perf_counter()
+        periods, ends = solve([dict(p, max_periods=int(g)) for p, g in zip(points, given)],
+                              ends)
+        took = time.perf_counter() - began
+        periods = np.maximum(np.asarray(periods, dtype=float), 1.0)
+        short = (periods >= given) & (budget > given)
+        cut, cap = cut + int(short.sum()), min(cap, given.min())
+        # the call's time, scaled to the periods its points are expected to run; the
+        # runs' first points from rest, the others continued
+        expected[min(k, 1)] += took * np.where(short, budget, periods).sum() / periods.sum()
+    per_point = expected / np.array([len(runs), max(len(runs) * (segment - 1), 1)])
+    length = spec.line_length
+    lines = remaining / length
+    side_by_side = max(1, threads // max(1, min(threads, _numba_threads())))
+    chunks = math.ceil(lines / min(spec.lines_per_chunk, math.ceil(lines)))
+    cut_short = (f"{cut} of {index.size} sampled points did not settle within the "
+                 f"sample's {cap:.0f} periods and are counted at their whole budget "
+                 "(max_periods)" if cut else "")
+    total = lines * (per_point[0] + (length - 1) * per_point[1])
+    return RunEstimate(spec.n_points, remaining, math.nan, threads,
+                       total / min(side_by_side, chunks), cut_short=cut_short)
+
+
+def _numba_threads() -> int:
+    import numba
+
+    return numba.get_num_threads()
+
+
 def _timed(points, remaining, lines, per_chunk, line_steps, line_rounds, chunk_rounds,
            sample, threads) -> RunEstimate:
     """The time of ``lines`` lines (each ``line_steps`` steps in ``line_rounds`` point
@@ -265,25 +337,32 @@ _SAMPLES: dict = {}  # a sweep's digest -> its Sample, measured in this process
 
 
 def _sample_of(spec) -> Sample:
-    length = spec.line_length
-    if not spec.continuation:
-        index = _spread(spec.n_points, SAMPLE_POINTS)
-        successors = np.full(len(index), -1)
-    else:
-        segment = min(SEGMENT, length)
-        lines = _spread(spec.n_lines, max(1, SAMPLE_POINTS // segment))
-        firsts = _spread(length - segment + 1, len(lines))
-        index, successors = [], []
-        for k, (line, first) in enumerate(zip(lines, np.resize(firsts, len(lines)))):
-            position = np.arange(first, first + segment)
-            if spec.directions[np.unravel_index(line, spec.line_shape)[0]] == "down":
-                position = length - 1 - position  # (a down line runs from its top)
-            index.extend(line * length + position)
-            successors.extend([k * segment + j + 1 for j in range(segment - 1)] + [-1])
-        index, successors = np.asarray(index), np.asarray(successors)
+    index, segment = _sample_index(spec)
+    successors = np.where(np.arange(len(index)) % segment < segment - 1,
+                          np.arange(len(index)) + 1, -1)
     packed, setup = _resolved(lambda i: spec.point_parameters(spec.values_at(i)), index,
                               spec.n_points)
     return _measure(packed, successors, spec.estimated(index), setup)
+
+
+def _sample_index(spec, count: int = SAMPLE_POINTS) -> tuple[np.ndarray, int]:
+    """The grid's points (flat indices) a sample solves, and the length of its runs: up to
+    ``count`` points spread over the grid, each from rest (runs of 1); under continuation
+    runs of SEGMENT consecutive points of a line in its direction, one after another in
+    the array, the first of each from rest."""
+    length = spec.line_length
+    if not spec.continuation:
+        return _spread(spec.n_points, count), 1
+    segment = min(SEGMENT, length)
+    lines = _spread(spec.n_lines, max(1, count // segment))
+    firsts = _spread(length - segment + 1, len(lines))
+    index = []
+    for line, first in zip(lines, np.resize(firsts, len(lines))):
+        position = np.arange(first, first + segment)
+        if spec.directions[np.unravel_index(line, spec.line_shape)[0]] == "down":
+            position = length - 1 - position  # (a down line runs from its top)
+        index.extend(line * length + position)
+    return np.asarray(index), segment
 
 
 def _basin_sample(spec) -> Sample:

@@ -73,11 +73,11 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
         from .beam_cluster import run_beam_file
 
         return run_beam_file(spec, output, resume=resume, workers=workers,
-                             scheduler=scheduler, announce=progress)
+                             scheduler=scheduler, announce=progress, yes=yes)
     if output is not None and not str(output).lower().endswith(".nc"):
         raise ParameterError(f"output = {str(output)!r}: the file name must end in .nc (the "
                              "file is netCDF)")
-    from .cluster import check_cluster
+    from .cluster import check_cluster, sweep_threads
 
     workers = check_cluster(workers, scheduler)
     store = ChunkStore(output, spec, resume) if output is not None else MemoryStore()
@@ -86,8 +86,8 @@ def run_sweep(sweep, output=None, *, resume: bool = False, progress: bool = True
             return store.finished_result(progress)
         finished = [chunk for chunk in store.present() if store.has(chunk)]
         remaining = spec.n_points - sum(chunk_points(spec, chunk) for chunk in finished)
-        announce(sweep_estimate(spec, remaining, _threads(workers, scheduler)), yes, progress,
-                 "make the grid coarser")
+        announce(sweep_estimate(spec, remaining, sweep_threads(workers, scheduler)), yes,
+                 progress, "make the grid coarser")
         finished = set(finished)
         todo = [chunk for chunk in range(spec.n_chunks) if chunk not in finished]
         done = spec.n_points - remaining
@@ -140,17 +140,3 @@ def _run_here(spec, chunks, store, bar) -> None:
                     prepared = ahead.result()
     finally:
         sys.setswitchinterval(interval)
-
-
-def _threads(workers: int | None, scheduler: str | None) -> int:
-    """Threads the sweep will run on: this process's numba threads, a LocalCluster's
-    cores, or 1 for a remote scheduler (its size is not known before connecting)."""
-    if scheduler is not None:
-        return 1
-    if workers is not None:
-        from .cluster import threads_per_worker
-
-        return workers * threads_per_worker(workers)
-    import numba
-
-    return numba.get_num_threads()

@@ -238,10 +238,10 @@ def test_the_cli_runs_a_file_stopped_by_ctrl_c_and_resumed(whole, tmp_path, caps
     monkeypatch.undo()
     err = capsys.readouterr().err
     assert "--resume" in err and "Traceback" not in err
-    assert "24 beam points in 4 chunks" in err  # said before the work
+    assert "harvester-sweep: 24 points\n" in err  # said before the work
     assert cli.main(["beam-sweep", str(path), "--output", str(out), "--resume"]) == 0
     err = capsys.readouterr().err
-    assert "24 beam points (16 still to run) in 4 chunks" in err
+    assert "harvester-sweep: 24 points (16 still to run)\n" in err
     assert err.count("up ") == 4 and err.count("down ") == 8  # a line per step of each line
     with xr.open_dataset(out) as written:
         assert_same_bits(written, whole)
