@@ -229,10 +229,15 @@ def _contact(p: dict, v: float, omega: float) -> tuple[float, float, float]:
     energy = 0.5 * m * v * v
     delta = hertz.penetration(energy, kh)
     if ch > 0:  # (the damping force k_h c_h v delta^1.5 as the spring)
-        delta = min(delta, hertz.penetration(energy, kh * ch * v))
+        spring = kh * ch * v
+        delta = min(delta, hertz.penetration(energy, spring) if math.isfinite(spring)
+                    # (taken apart where the product overflows: a c_h of 1e300 s/m)
+                    else hertz.penetration(energy, kh) * ch ** -0.4 * v ** -0.4)
     delta += max(-p["gap"], 0.0)  # a preloaded stop is already pressed in
-    return (math.sqrt(hertz.stiffness(kh, delta) / m), hertz.static_force(kh, delta) * ch / m,
-            delta)
+    rates = (math.sqrt(hertz.stiffness(kh, delta) / m), hertz.static_force(kh, delta) * ch / m)
+    if not all(map(math.isfinite, rates)):  # (a c_h of inf: 0 inf is NaN, which max drops)
+        raise OverflowError("the contact's rates are not finite numbers")
+    return (*rates, delta)
 
 
 @_remembered

@@ -125,6 +125,26 @@ def test_remembered_checks_tell_bools_from_numbers():
         resolve_parameters("paper", mass=None)
 
 
+@pytest.mark.parametrize("overrides, words", [
+    # c_h k_h v overflows: the damping's penetration taken apart, its rate ~ c_h^0.4
+    (dict(contact_damping=1e300), "too stiff: the contact damping"),
+    (dict(contact_damping=1.7e308), "too stiff: the contact damping"),
+    # c_h = 3 (1 - e^2) / (4 v_imp) is inf: no rate to take a step from
+    (dict(impact_velocity=5e-324), "beyond double precision"),
+    (dict(contact_law="flores", impact_velocity=1e-320), "beyond double precision"),
+])
+def test_a_contact_damping_beyond_double_precision_is_refused_before_integration(
+        overrides, words):
+    """Each value in its range, the contact damping rate they make overflows: the point is
+    refused in one line before any integration, not given the coarsest step (64 a period)
+    at which it diverges (exit 3)."""
+    from harvester_sweep.packing import check_runnable
+
+    with pytest.raises(ParameterError) as info:
+        check_runnable(resolve_parameters("paper", **overrides))
+    assert words in str(info.value) and "\n" not in str(info.value)
+
+
 SWEEP_KEYS = ("directions", "outputs", "samples", "chunk_size", "error_estimate")
 
 
