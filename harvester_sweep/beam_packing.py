@@ -16,11 +16,12 @@ import numpy as np
 from . import bimorph as _bimorph
 from . import rod as _rod
 from ._engine import NO_STOP
-from .beam_parameters import bimorph, contact_position, rod
+from .beam_parameters import BEAM_PARAMETERS, bimorph, contact_position, rod
 from .contact import contact_damping
 from .modal_map import ModalPoint, pack
 from .models import beam as beam_model
 from .models import hertz
+from .parameters import TooStiffError
 
 #: Grid steps per period at least, and per period of the highest bending mode: the grid
 #: looks for touches and samples the outputs, whose extrema and int V^2 dt it
@@ -136,6 +137,14 @@ def first_steps(p: dict, bs: BeamSystem) -> tuple[int, float]:
     if steps is None:
         ratio = float(bs.modes.omega[-1]) / (2 * math.pi * p["frequency"])
         steps = max(MIN_STEPS, 2 ** math.ceil(math.log2(STEPS_PER_MODE_CYCLE * ratio)))
+        most = BEAM_PARAMETERS["steps_per_period"].high
+        if steps > most:  # (a beam of a micrometre: gigabytes and minutes, then a crash)
+            raise TooStiffError(
+                f"too stiff: the beam's mode {len(bs.modes.omega)}, at "
+                f"{float(bs.modes.omega[-1]) / (2 * math.pi):.3g} Hz, asks {steps:.3g} grid "
+                f"steps per forcing period at {p['frequency']:g} Hz, beyond the "
+                f"{most:g} steps_per_period [-] allows: take fewer modes (n_modes) or a "
+                "beam whose modes are slower")
     substep = p["contact_step"]
     if substep is None:
         substep = contact_duration(p, bs) / SUBSTEPS_PER_CONTACT

@@ -382,8 +382,17 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     # with no estimate: a finer step would only run its whole budget again
     done = {k: (coarse[k], math.nan) for k in todo if m[k, HEAD.status] != _SETTLED}
     todo = [k for k in todo if k not in done]
-    lv = 1
+    lv, estimate = 1, dict.fromkeys(todo, math.nan)
+    most = BEAM_PARAMETERS["steps_per_period"].high
     while todo and lv <= MAX_LEVELS:
+        # a level whose grid would pass the steps_per_period the parameter table allows is
+        # not run (a scene records every step): the point keeps the estimate it has, none
+        # at its first step
+        for k in [k for k in todo if g.first[k][0] * 2 ** lv > most]:
+            done[k] = coarse[k], estimate[k]
+            todo.remove(k)
+        if not todo:
+            break
         packs = g.packs(todo, lv)
         start = np.array([coarse[k][1] for k in todo])
         per = np.array([max(int(coarse[k][0][0]["orbit_period"]), 1) for k in todo],
@@ -400,7 +409,7 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
             if est <= points[k]["accuracy"] or not math.isfinite(est) or lv == MAX_LEVELS:
                 done[k] = fine, est
             else:
-                coarse[k] = fine
+                coarse[k], estimate[k] = fine, est
                 nxt.append(k)
         todo, lv = nxt, lv + 1
     mult = _multipliers(g, done)

@@ -631,7 +631,11 @@ def _check_corners(spec: SweepSpec) -> None:
     for corner in itertools.product(*(values for _, values in extremes)):
         values = {name: value for (name, _), value in zip(extremes, corner)}
         try:
-            spec.point_parameters(values)  # (a point too stiff is flagged, not refused here)
+            p = spec.point_parameters(values)  # (a point too stiff is flagged, not refused here)
+            if spec.model == "beam":  # (but a beam's grid beyond steps_per_period's range is)
+                from .beam_packing import beam_system, first_steps
+
+                first_steps(p, beam_system(p))
         except ParameterError as error:
             at = ", ".join(f"{name} = {value:g}" for name, value in values.items())
             raise ParameterError(f"grid: at the grid point {at}: {error}") from None

@@ -365,3 +365,15 @@ def test_an_axis_sweep_on_the_command_line_is_kept_for_resume_too(whole, tmp_pat
     assert cli.main(argv + ["--resume"]) == 0
     with xr.open_dataset(out) as written:  # (the default chunks: one a direction)
         assert_same_bits(written, whole)
+
+
+def test_a_grid_corner_whose_modes_ask_too_many_steps_is_refused_before_any_work():
+    # A micrometre beam at one end of a length axis: its first mode asks 3e7 grid steps a
+    # period, beyond steps_per_period's range; found at the grid's corners, one line.
+    sweep = {"model": "beam", "preset": "bimorph_tip", "parameters": {"n_modes": 1},
+             "grid": {"length": [1e-6, 28.81e-3], "frequency": [130.0, 150.0]}}
+    with pytest.raises(ParameterError) as info:
+        load_sweep(sweep, model="beam")
+    message = str(info.value)
+    assert message.startswith("grid: at the grid point length = 1e-06, frequency = 130: too "
+                              "stiff: the beam's mode 1") and "\n" not in message

@@ -65,6 +65,41 @@ def test_a_stop_of_no_stiffness_is_no_stop(lower_gap):
     assert v["v_peak"][0] == pytest.approx(abs(V), rel=1e-9)
 
 
+@pytest.mark.parametrize("length", [1e-6, 1e-9])
+def test_a_beam_whose_modes_ask_too_many_steps_is_refused_in_one_line(length):
+    """A micrometre beam's first mode asks 3e7 grid steps a period: refused before any
+    integration, naming the limit (it ran for minutes in 13 GB and reported 6.7e7 steps,
+    or ended in a numba MemoryError traceback)."""
+    from harvester_sweep.parameters import TooStiffError
+
+    p = resolve_beam_parameters("bimorph_tip", n_modes=1, length=length)
+    with pytest.raises(TooStiffError, match=r"^too stiff: the beam's mode 1, at .* Hz, asks "
+                       r".* beyond the 1e\+07 steps_per_period \[-\] allows"):
+        solve_beam([p])
+
+
+@pytest.mark.parametrize("levels", [0, 1])
+def test_the_accuracy_check_takes_no_grid_beyond_the_largest_steps_per_period(
+        monkeypatch, levels):
+    """With steps_per_period's largest between the first step times 2^levels and
+    2^(levels + 1), the halvings stop there: the point reports that level's grid and the
+    estimate it has (none at its first step), as the table's bound says."""
+    from dataclasses import replace
+
+    from harvester_sweep.beam_parameters import BEAM_PARAMETERS
+
+    p = resolve_beam_parameters("bimorph_tip", n_modes=1, frequency=150.0, accuracy=1e-13)
+    first = first_steps(p, system_of(p))[0]
+    monkeypatch.setitem(BEAM_PARAMETERS, "steps_per_period",
+                        replace(BEAM_PARAMETERS["steps_per_period"],
+                                high=1.5 * first * 2 ** levels))
+    v = solve_beam([p]).values
+    assert v["status"][0] == 0 and v["steps_per_period"][0] == first * 2 ** levels
+    assert math.isnan(v["error_estimate"][0]) == (levels == 0)
+    if levels:
+        assert v["error_estimate"][0] > p["accuracy"]
+
+
 def test_the_contact_free_map_and_its_reach_are_the_linear_systems():
     """Clear of the stop: the monodromy in closed form is SciPy's expm of the linear
     system over the periods; the reach that proves a motion never comes to the stop bounds
