@@ -7,6 +7,7 @@ import contextlib
 import json
 import re
 import sys
+import tempfile
 import time
 import warnings
 from pathlib import Path
@@ -369,8 +370,15 @@ def _check_output(path: str, suffixes: tuple) -> None:
         raise ParameterError(f"{path!r}: the file name must end in {' or '.join(suffixes)}")
     if Path(path).is_dir():
         raise ParameterError(f"{path} is a folder: give a file name")
-    if not Path(path).parent.is_dir():
-        raise ParameterError(f"{path}: the folder {Path(path).parent} does not exist")
+    folder = Path(path).parent
+    if not folder.is_dir():
+        raise ParameterError(f"{path}: the folder {folder} does not exist")
+    try:  # (a folder that takes no file, found now rather than after the work)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as error:
+        raise ParameterError(f"{path}: cannot write in the folder {folder} "
+                             f"({error.strerror or error})") from None
 
 
 def _run(args) -> int:

@@ -333,3 +333,28 @@ def test_files_that_cannot_be_written_or_read_are_one_line(argv, words, tmp_path
     err = [line for line in capsys.readouterr().err.splitlines()
            if "compiling the RK4 kernel" not in line]  # (said when the cache is cold)
     assert len(err) == 1 and words in err[0], err
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="no /proc: no folder that takes no file")
+@pytest.mark.parametrize("argv, works", [
+    (["scene", "--json", "--output", "/proc/x.nc"], ("scene", "run_scene")),
+    (["scene", "--json", "--plot", "/proc/x.png"], ("scene", "run_scene")),
+    (["beam-scene", "--set", "n_modes=1", "--output", "/proc/x.nc"],
+     ("beam_runs", "beam_scene")),
+    (["beam-continue", "frequency", "140", "150", "--set", "n_modes=1", "--output",
+      "/proc/x.nc"], ("beam_continuation", "continue_beam_branch")),
+    (["beam-basins", "--set", "n_modes=1", "--samples", "4", "--output", "/proc/x.nc"],
+     ("beam_basins", "beam_basins")),
+])
+def test_a_folder_that_takes_no_file_is_refused_before_any_work(argv, works, monkeypatch,
+                                                                capsys):
+    # (/proc takes no new file, even from root; the work, were it started, fails the test)
+    import importlib
+
+    def work(*args, **kwargs):
+        raise AssertionError("the work started before the output was checked")
+
+    monkeypatch.setattr(importlib.import_module(f"harvester_sweep.{works[0]}"), works[1], work)
+    assert cli.main(argv) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if "compiling" not in line]
+    assert len(err) == 1 and "cannot write in the folder /proc" in err[0], err
