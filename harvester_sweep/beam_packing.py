@@ -133,11 +133,10 @@ def first_steps(p: dict, bs: BeamSystem) -> tuple[int, float]:
     """The first choice of grid steps per period [-] and contact sub-step [s]: the grid
     samples the highest bending mode STEPS_PER_MODE_CYCLE times a cycle; the sub-step is
     the estimated contact duration over SUBSTEPS_PER_CONTACT."""
-    steps = p["steps_per_period"]
+    steps, most = p["steps_per_period"], BEAM_PARAMETERS["steps_per_period"].high
     if steps is None:
         ratio = float(bs.modes.omega[-1]) / (2 * math.pi * p["frequency"])
         steps = max(MIN_STEPS, 2 ** math.ceil(math.log2(STEPS_PER_MODE_CYCLE * ratio)))
-        most = BEAM_PARAMETERS["steps_per_period"].high
         if steps > most:  # (a beam of a micrometre: gigabytes and minutes, then a crash)
             raise TooStiffError(
                 f"too stiff: the beam's mode {len(bs.modes.omega)}, at "
@@ -148,7 +147,21 @@ def first_steps(p: dict, bs: BeamSystem) -> tuple[int, float]:
     substep = p["contact_step"]
     if substep is None:
         substep = contact_duration(p, bs) / SUBSTEPS_PER_CONTACT
+    count = contact_steps(p, substep)
+    if count > most:  # (a contact step of 1e-300 s: a run without end)
+        what = (f"contact_step [s] = {substep:.3g}" if p["contact_step"] is not None else
+                f"the contact, estimated to last {substep * SUBSTEPS_PER_CONTACT:.3g} s,")
+        raise TooStiffError(
+            f"too stiff: {what} asks {count:.3g} RK4 sub-steps per forcing period at "
+            f"{p['frequency']:g} Hz in contact, beyond the {most:g} steps a period "
+            "steps_per_period [-] allows: give a longer contact_step [s]")
     return int(steps), float(substep)
+
+
+def contact_steps(p: dict, substep: float) -> float:
+    """The RK4 sub-steps of ``substep`` [s] a forcing period of ``p`` holds: what a point in
+    contact all period would take [-]."""
+    return 1.0 / (p["frequency"] * substep)
 
 
 def contact_duration(p: dict, bs: BeamSystem) -> float:

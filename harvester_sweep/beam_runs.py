@@ -29,7 +29,7 @@ from .acceptance import (
     periods_to_near,
     suggested_period,
 )
-from .beam_packing import BeamSystem, beam_system, first_steps, pack_beam
+from .beam_packing import BeamSystem, beam_system, contact_steps, first_steps, pack_beam
 from .beam_parameters import (
     BEAM_PARAMETERS,
     BEAM_PRESET_NOTES,
@@ -385,10 +385,11 @@ def _solve_group(points, systems, starts, idx, values, modal, multipliers, ends,
     lv, estimate = 1, dict.fromkeys(todo, math.nan)
     most = BEAM_PARAMETERS["steps_per_period"].high
     while todo and lv <= MAX_LEVELS:
-        # a level whose grid would pass the steps_per_period the parameter table allows is
-        # not run (a scene records every step): the point keeps the estimate it has, none
-        # at its first step
-        for k in [k for k in todo if g.first[k][0] * 2 ** lv > most]:
+        # a level whose grid, or whose contact sub-steps a period, would pass the
+        # steps_per_period the parameter table allows is not run (a scene records every
+        # step): the point keeps the estimate it has, none at its first step
+        for k in [k for k in todo if 2 ** lv * max(
+                g.first[k][0], contact_steps(g.points[k], g.first[k][1])) > most]:
             done[k] = coarse[k], estimate[k]
             todo.remove(k)
         if not todo:

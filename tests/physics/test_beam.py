@@ -78,21 +78,42 @@ def test_a_beam_whose_modes_ask_too_many_steps_is_refused_in_one_line(length):
         solve_beam([p])
 
 
+@pytest.mark.parametrize("overrides, words", [
+    (dict(contact_step=1e-10), "contact_step [s] = 1e-10 asks 7.14e+07 RK4 sub-steps"),
+    (dict(contact_step=1e-300), "contact_step [s] = 1e-300 asks 7.14e+297 RK4 sub-steps"),
+    (dict(hertz_stiffness=1e40), "the contact, estimated to last"),
+])
+def test_a_contact_step_too_short_to_run_is_refused_in_one_line(overrides, words):
+    """A contact sub-step of 1e-10 s at 140 Hz is 7e7 RK4 steps a period in contact, more
+    than steps_per_period's range allows the grid: refused before any integration (1e-10
+    ran past a minute, 1e-300 without end and deaf to Ctrl-C)."""
+    from harvester_sweep.parameters import TooStiffError
+
+    p = resolve_beam_parameters("bimorph_tip", n_modes=1, **overrides)
+    with pytest.raises(TooStiffError) as info:
+        solve_beam([p])
+    assert str(info.value).startswith(f"too stiff: {words}") and "\n" not in str(info.value)
+
+
 @pytest.mark.parametrize("levels", [0, 1])
 def test_the_accuracy_check_takes_no_grid_beyond_the_largest_steps_per_period(
         monkeypatch, levels):
-    """With steps_per_period's largest between the first step times 2^levels and
-    2^(levels + 1), the halvings stop there: the point reports that level's grid and the
+    """With steps_per_period's largest between the first step (the grid's, or the contact
+    sub-steps a period, whichever the more) times 2^levels and 2^(levels + 1), the
+    halvings stop there: the point reports that level's grid and the
     estimate it has (none at its first step), as the table's bound says."""
     from dataclasses import replace
 
     from harvester_sweep.beam_parameters import BEAM_PARAMETERS
 
+    from harvester_sweep.beam_packing import contact_steps
+
     p = resolve_beam_parameters("bimorph_tip", n_modes=1, frequency=150.0, accuracy=1e-13)
-    first = first_steps(p, system_of(p))[0]
+    first, substep = first_steps(p, system_of(p))
+    most = max(first, contact_steps(p, substep))  # (the grid's, or the contact's sub-steps)
     monkeypatch.setitem(BEAM_PARAMETERS, "steps_per_period",
                         replace(BEAM_PARAMETERS["steps_per_period"],
-                                high=1.5 * first * 2 ** levels))
+                                high=1.5 * most * 2 ** levels))
     v = solve_beam([p]).values
     assert v["status"][0] == 0 and v["steps_per_period"][0] == first * 2 ** levels
     assert math.isnan(v["error_estimate"][0]) == (levels == 0)
