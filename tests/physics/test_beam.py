@@ -104,9 +104,8 @@ def test_the_accuracy_check_takes_no_grid_beyond_the_largest_steps_per_period(
     estimate it has (none at its first step), as the table's bound says."""
     from dataclasses import replace
 
-    from harvester_sweep.beam_parameters import BEAM_PARAMETERS
-
     from harvester_sweep.beam_packing import contact_steps
+    from harvester_sweep.beam_parameters import BEAM_PARAMETERS
 
     p = resolve_beam_parameters("bimorph_tip", n_modes=1, frequency=150.0, accuracy=1e-13)
     first, substep = first_steps(p, system_of(p))
