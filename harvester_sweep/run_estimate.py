@@ -288,7 +288,7 @@ def beam_estimate(spec, remaining: int, threads: int, solve) -> RunEstimate:
     per_point = expected / np.array([len(runs), max(len(runs) * (segment - 1), 1)])
     length = spec.line_length
     lines = remaining / length
-    side_by_side = max(1, threads // max(1, min(threads, _numba_threads())))
+    side_by_side = _threads_here(threads)[1]
     chunks = math.ceil(lines / min(spec.lines_per_chunk, math.ceil(lines)))
     cut_short = (f"{cut} of {index.size} sampled points did not settle within the "
                  f"sample's {cap:.0f} periods and are counted at their whole budget "
@@ -298,20 +298,20 @@ def beam_estimate(spec, remaining: int, threads: int, solve) -> RunEstimate:
                        total / min(side_by_side, chunks), cut_short=cut_short)
 
 
-def _numba_threads() -> int:
+def _threads_here(threads: int) -> tuple[int, int]:
+    """Of a run's ``threads``: this process's numba threads it takes, and the chunks it
+    runs side by side (on Dask workers, when ``threads`` is more than this process has)."""
     import numba
 
-    return numba.get_num_threads()
+    local = max(1, min(threads, numba.get_num_threads()))
+    return local, max(1, threads // local)
 
 
 def _timed(points, remaining, lines, per_chunk, line_steps, line_rounds, chunk_rounds,
            sample, threads) -> RunEstimate:
     """The time of ``lines`` lines (each ``line_steps`` steps in ``line_rounds`` point
     rounds) run ``per_chunk`` lines at a time, a chunk's rounds ``chunk_rounds``."""
-    import numba
-
-    local = max(1, min(threads, numba.get_num_threads()))
-    side_by_side = max(1, threads // local)  # chunks at once (Dask workers)
+    local, side_by_side = _threads_here(threads)
     chunks = math.ceil(lines / per_chunk)
     # A call's steps: its lines' share of a round; a short call (SHORT_CALL, the engine's
     # own line) takes one thread.
