@@ -2,6 +2,7 @@
 
     python -m benchmarks.compile_time [--output FILE]
     python -m pytest -p benchmarks.compile_time tests      # a suite's, on a cold cache
+    python -m pytest -p benchmarks.compile_time -n 2 --dist loadfile tests   # (its workers')
 
 The command compiles, each in a new process with an empty numba cache of its own (a
 temporary ``NUMBA_CACHE_DIR``), what a first run compiles: the lane engine
@@ -117,6 +118,18 @@ def main(argv=None) -> None:
 
 def pytest_runtest_setup(item):
     _TEST[0] = item.nodeid
+
+
+def pytest_sessionfinish(session):
+    # (an xdist worker: its compiles to the controller, which prints them all)
+    if hasattr(session.config, "workeroutput"):
+        session.config.workeroutput["numba_compiles"] = json.dumps(_ROWS)
+
+
+def pytest_testnodedown(node, error):
+    rows = getattr(node, "workeroutput", {}).get("numba_compiles")
+    if rows:
+        _ROWS.extend(tuple(row) for row in json.loads(rows))
 
 
 def pytest_terminal_summary(terminalreporter):

@@ -847,7 +847,7 @@ def _announce_beam_compilation() -> None:
         from ._engine import cache
         from ._engine.modal import kernel
 
-        warm = cache.is_warm(kernel.settle_points)
+        warm = cache.is_warm(kernel.take_points)
     except (ImportError, AttributeError):  # (the engine's layout changed: say nothing)
         return
     if not warm:

@@ -19,7 +19,7 @@ import scipy.linalg
 
 from ._engine import modal
 from ._engine.modal import REAL, RealFields, complex_fields, real_fields
-from ._engine.scheduler import SHORT_CALL
+from ._engine.scheduler import SHORT_CALL, run_watched
 
 #: The largest condition number of the eigenvector basis accepted: beyond it the linear
 #: part is too near a defective matrix (two equal eigenvalues sharing one eigenvector)
@@ -165,7 +165,8 @@ def run(packs, starts) -> tuple:
     rrows = np.array([pk.rrow for pk in packs])
     metrics = np.empty((len(packs), modal.metric_size(K)))
     strobes = np.empty((len(packs), modal.SAMPLES, D))
-    modal.settle_points(crows, rrows, z, metrics, strobes, _threads(rrows, None, D), D, S, K)
+    _take(modal.SETTLE, crows, rrows, z, None, metrics, strobes, None, None,
+          _threads(rrows, None, D), (D, S, K))
     ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
     return metrics, ends, strobes
 
@@ -182,8 +183,8 @@ def measure(packs, states, periods) -> tuple:
     periods = np.asarray(periods, dtype=np.int64)
     metrics = np.empty((len(packs), modal.metric_size(K)))
     strobes = np.empty((len(packs), modal.SAMPLES, D))
-    modal.measure_points(np.array([pk.crow for pk in packs]), rrows, z, periods, metrics,
-                         strobes, _threads(rrows, periods, D), D, S, K)
+    _take(modal.MEASURE, np.array([pk.crow for pk in packs]), rrows, z, periods, metrics,
+          strobes, None, None, _threads(rrows, periods, D), (D, S, K))
     ends = np.array([pk.to_state(zi) for pk, zi in zip(packs, z)])
     back = np.arange(SAMPLES) - SAMPLES  # (periods before the end)
     for i, p in enumerate(np.clip(periods, 1, SAMPLES)):
@@ -228,8 +229,8 @@ def _map(packs, states, periods, tangents) -> tuple:
     rrows = np.array([pk.rrow for pk in packs])
     periods = np.asarray(periods, dtype=np.int64)
     tangents = np.ascontiguousarray(tangents, dtype=float)
-    modal.map_points(np.array([pk.crow for pk in packs]), rrows, z, periods, tangents, ok,
-                     _threads(rrows, periods, D), D, S, K)
+    _take(modal.MAP, np.array([pk.crow for pk in packs]), rrows, z, periods, None, None,
+          tangents, ok, _threads(rrows, periods, D), (D, S, K))
     return np.array([pk.to_state(zi) for pk, zi in zip(packs, z)]), ok, tangents
 
 
@@ -255,6 +256,32 @@ def monodromies(packs, states, periods, steps, central=False) -> tuple:
     else:
         jac = (ends[:, 1:D + 1] - ends[:, :1]).transpose(0, 2, 1) / steps[:, None, :]
     return jac, ends[:, 0], ok.reshape(n, copies).all(axis=1)
+
+
+def _take(kind, crows, rrows, z, periods, metrics, strobes, tangents, ok, threads, dims):
+    """The modal engine's take_points of ``kind`` on points of dimensions ``dims`` (D, S,
+    K), on ``threads`` threads of the engine's pool taking their points from one counter,
+    in a way an interrupt reaches: it stops the threads taking points, and is raised once
+    they have returned. The arrays a kind does not use are None here (empty ones of their
+    types are passed, so that every kind calls one compiled entry)."""
+    D, S, K = dims
+    n = len(crows)
+    if periods is None:
+        periods = np.zeros(n, dtype=np.int64)
+    if metrics is None:
+        metrics, strobes = np.empty((n, 0)), np.empty((n, 0, 0))
+    if tangents is None:
+        tangents, ok = np.empty((n, 2, D, 0)), np.empty(n, dtype=bool)
+    taken = np.zeros(2, dtype=np.int64)  # the next point; nonzero: stop taking points
+
+    def task():
+        modal.take_points(kind, crows, rrows, z, periods, metrics, strobes, tangents, ok,
+                          taken, D, S, K)
+
+    def stop():
+        taken[1] = 1
+
+    run_watched([task] * threads, lambda: 0, stop)
 
 
 def _threads(rrows, periods, D) -> int:

@@ -749,7 +749,10 @@ def _voltage_rate_of(L, j):
     return voltage_rate(L[LANE.voltage + j], L[LANE.v + j], L[LANE.irc + j], L[LANE.thc + j])
 
 
-@njit(inline="always", **JIT)
+# (a call, not inlined: finish_step calls it twice, and numba compiled the inlined body
+# once for each, a large share of the lane engine's compile time; a step finished in
+# scalar code does not notice the call)
+@njit(**JIT)
 def _finish_rigid(L, j, it):
     """finish_step with a rigid stop, in iteration ``it``: the step redone where it
     switches contact or needs quarter steps, its extrema and force peak placed, the lane

@@ -439,8 +439,8 @@ def test_a_mode_decayed_clear_of_the_stops_is_zero_not_subnormal():
     T = 2 * np.pi / pk.rrow[modal_map.RealFields(*modal_map.real_fields(D, S, K)).omega]
     passed = np.zeros(D, dtype=bool)  # components whose exact flow went below TINY
     for n in range(1, 121):
-        modal_map.modal.map_points(pk.crow[None], pk.rrow[None], z, np.array([1]),
-                                   np.empty((1, 2, D, 0)), ok, 1, D, S, K)
+        modal_map._take(modal_map.modal.MAP, pk.crow[None], pk.rrow[None], z, np.array([1]),
+                         None, None, np.empty((1, 2, D, 0)), ok, 1, (D, S, K))
         assert ok[0]
         parts = np.concatenate([z[0].real, z[0].imag])
         assert ((parts == 0.0) | (np.abs(parts) >= tiny)).all(), f"subnormal at period {n}"

@@ -14,7 +14,7 @@ from pathlib import Path
 from ...models import hertz
 from .. import cache, hermite
 from . import kernel, layout
-from .kernel import MAX_ORBIT, SAMPLES, map_points, measure_points, record_samples, settle_points
+from .kernel import MAP, MAX_ORBIT, MEASURE, SAMPLES, SETTLE, record_samples, take_points
 from .layout import (
     COMPLEX,
     HEAD,
@@ -31,8 +31,8 @@ SOURCE_DIGEST = cache.source_digest((_HERE, _HERE.parent / "hermite.py",
                                      _HERE.parent / "atomic.py",
                                      _HERE.parent.parent / "models" / "hertz.py",
                                      _HERE.parent.parent / "jit.py"))
-cache.flush_if_changed(kernel.settle_points, (kernel, layout), SOURCE_DIGEST)
+cache.flush_if_changed(kernel.take_points, (kernel, layout), SOURCE_DIGEST)
 
-__all__ = ["COMPLEX", "HEAD", "MAX_ORBIT", "METRIC_HEAD", "REAL", "SAMPLES", "RealFields",
-           "SOURCE_DIGEST", "complex_fields", "hermite", "hertz", "map_points", "measure_points",
-           "metric_size", "real_fields", "record_samples", "settle_points"]
+__all__ = ["COMPLEX", "HEAD", "MAP", "MAX_ORBIT", "MEASURE", "METRIC_HEAD", "REAL", "SAMPLES",
+           "SETTLE", "RealFields", "SOURCE_DIGEST", "complex_fields", "hermite", "hertz",
+           "metric_size", "real_fields", "record_samples", "take_points"]

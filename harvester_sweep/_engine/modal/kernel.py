@@ -35,7 +35,6 @@ import cmath
 import math
 
 import numpy as np
-from numba import prange
 
 from ...jit import JIT, njit
 from ...models import hertz
@@ -1052,42 +1051,49 @@ def _measure(tables, r, z, st, periods, status, metrics, buf, D, S, K):
         metrics[_APPROACH] = np.nan
 
 
-@njit(parallel=True, **JIT)
-def settle_points(crows, rrows, z, metrics, strobes, threads, D, S, K):
-    """Every point (complex rows (n, ...), real rows (n, ...), eigen-coordinates z (n, D),
-    replaced by the end) to steady state: metrics (n, metric_size(K)), strobes
-    (n, SAMPLES, D). Each point is run alone, so its numbers do not depend on the
-    threads or the other points. Each of ``threads`` threads takes the next point from a
-    shared counter, so that one slow point does not hold back others dealt to its thread."""
+#: What take_points does with each point it takes: run it to steady state and measure its
+#: orbit (settle_points), measure its orbit over given periods (measure_points), or run
+#: its period map with tangents carried along (map_points).
+SETTLE, MEASURE, MAP = 0, 1, 2
+
+
+@njit(nogil=True, **JIT)
+def take_points(kind, crows, rrows, z, periods, metrics, strobes, tangents, ok, taken, D, S,
+                K):
+    """Points of one call, each taken by the calling thread from the shared counter
+    ``taken[0]`` (until ``taken[1]`` is set: stop) and done as ``kind`` says: SETTLE, every
+    point (complex rows (n, ...), real rows (n, ...), eigen-coordinates z (n, D), replaced by
+    the end) to steady state: metrics (n, metric_size(K)), strobes (n, SAMPLES, D);
+    MEASURE, its orbit measured over its ``periods[i]`` forcing periods from z (replaced by
+    the end), taken to be on the orbit: metrics as SETTLE's with the status SETTLED unless
+    the run diverged, strobes the last ``periods[i]`` strobes (oldest first) at the end,
+    zero before them; MAP, the period map: z replaced by its state after periods[i]
+    forcing periods, the tangents ``tangents[i]`` (2, D, m: changes of z, real and
+    imaginary parts, component by tangent; m = 0: none) carried along (replaced: the
+    map's derivative applied to them), ok[i] False where the run diverged. The arguments
+    a kind does not use are any arrays of their types.
+
+    Each point is run alone, so its numbers do not depend on the threads or the other
+    points; the threads share one counter, so that one slow point does not hold back
+    others. One compiled entry for the three kinds and for every thread count: its
+    machine code, and with it the run's threads, are the caller's (a parallel loop for
+    each kind compiled the engine's calls three times more)."""
     n = crows.shape[0]
-    taken = np.zeros(1, dtype=np.int64)
-    for _ in prange(threads):
-        i = fetch_add(taken, 0)
-        while i < n:
+    i = fetch_add(taken, 0)
+    while i < n and taken[1] == 0:
+        if kind == SETTLE:
             run_point(crows[i], rrows[i], z[i], metrics[i], strobes[i], D, S, K)
-            i = fetch_add(taken, 0)
-
-
-@njit(parallel=True, **JIT)
-def measure_points(crows, rrows, z, periods, metrics, strobes, threads, D, S, K):
-    """Every point's orbit measured over its ``periods[i]`` forcing periods from z (n, D)
-    (replaced by the end), taken to be on the orbit: metrics as settle_points', the
-    status SETTLED unless the run diverged; strobes (n, SAMPLES, D) the last ``periods[i]``
-    strobes (oldest first) at the end, zero before them; points taken as settle_points
-    does."""
-    n = crows.shape[0]
-    taken = np.zeros(1, dtype=np.int64)
-    for _ in prange(threads):
-        i = fetch_add(taken, 0)
-        while i < n:
+        elif kind == MEASURE:
             _measure_point(crows[i], rrows[i], z[i], periods[i], metrics[i], strobes[i], D, S,
                            K)
-            i = fetch_add(taken, 0)
+        else:
+            ok[i] = _map_point(crows[i], rrows[i], z[i], periods[i], tangents[i], D, S, K)
+        i = fetch_add(taken, 0)
 
 
 @njit(**JIT)
 def _measure_point(c, r, z, periods, metrics, ring, D, S, K):
-    """One point of measure_points."""
+    """One point of take_points' MEASURE."""
     tables = _tables(c, r, D, S, K)
     pen, pl, pen_p, gap, ch = tables[2], tables[3], tables[5], tables[8], tables[10]
     st = _start(z, r[0], pen, pen_p, pl, gap, ch, D, S)
@@ -1119,25 +1125,9 @@ def record_samples(c, r, z, periods, rec, D, S, K):
     return n
 
 
-@njit(parallel=True, **JIT)
-def map_points(crows, rrows, z, periods, tangents, ok, threads, D, S, K):
-    """The period map: every point (rows as settle_points) from z (n, D), replaced by its
-    state after periods[i] forcing periods on ``threads`` threads, with the tangents
-    ``tangents[i]`` (2, D, m: changes of z, real and imaginary parts, component by
-    tangent; m = 0: none) carried along (replaced: the map's derivative applied to them);
-    ok[i] is False where the run diverged."""
-    n = crows.shape[0]
-    taken = np.zeros(1, dtype=np.int64)
-    for _ in prange(threads):  # (points taken as settle_points does)
-        i = fetch_add(taken, 0)
-        while i < n:
-            ok[i] = _map_point(crows[i], rrows[i], z[i], periods[i], tangents[i], D, S, K)
-            i = fetch_add(taken, 0)
-
-
 @njit(**JIT)
 def _map_point(c, r, z, periods, tan, D, S, K):
-    """One point of map_points: z (D,) replaced by its state after ``periods`` forcing
+    """One point of take_points' MAP: z (D,) replaced by its state after ``periods`` forcing
     periods, the tangents ``tan`` (2, D, m) carried along; False where the run diverged."""
     (lam, grid, pen, pl, pl2, pen_p, pab, inp, gap, kh, ch, out, outl, out_p, out_f,
      strobe, y_p, scale) = _tables(c, r, D, S, K)
