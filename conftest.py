@@ -1,25 +1,32 @@
 """The test suite on several processes (pytest-xdist, as the README's test command runs it):
-the workers first fill numba's on-disk cache between them.
+the workers fill numba's on-disk cache between them, and no two compile the same engine.
 
 On a cold cache most of a suite's time is numba compiling two machine codes that share
 little: the tip-mass model's lane engine with the orbit solver, and the beam's modal
-engine, each minutes on one core. Each worker compiles its share (worker k the parts
-k, k + workers, ...) before any test, then waits until every part is in the cache, so that
-no test compiles what another worker is compiling; the tests then load them. The cache is
-safe for processes that compile at once (harvester_sweep.jit), so a worker that gives up
-waiting only compiles again. Without xdist nothing is done here: the first test that needs
-an engine compiles it. (With xdist, a run of a few tests compiles both engines first, when
-the cache is cold.)
+engine, each minutes on one core. Each worker compiles its share of them (worker k the
+parts k, k + workers, ...) once the tests are collected and dealt out, and then runs its
+tests. A part another worker is still compiling is waited for, not compiled again: in a
+worker that has done its share, numba's compiling of a function of such a part waits until
+the part is in the cache (and then loads it), and so does starting another process (a
+command-line test, a Dask worker, a notebook's kernel), which would compile what it lacks.
+So the worker that finishes first runs the tests that need only its part while the other
+compiles. The cache is safe for processes that compile at once (harvester_sweep.jit), so a
+worker that gives up waiting only compiles again. Without xdist nothing is done here: the
+first test that needs an engine compiles it.
 """
 
 from __future__ import annotations
 
+import multiprocessing.process
+import subprocess
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
-#: The longest a worker waits for the others' parts [s] (a part takes minutes cold).
+import pytest
+
+#: The longest a worker waits for another's part [s] (a part takes minutes cold).
 WAIT = 1800.0
 
 
@@ -38,24 +45,88 @@ def _beam() -> None:
     beam_scene("bimorph_tip", periods=1, n_modes=1, gap=1e-6, frequency=230.0)
 
 
+#: The parts, each with the modules whose compiled functions it holds (the first prefix
+#: that a function's module starts with names its part).
 PARTS = (_tip_mass, _beam)
+_OWNERS = (("harvester_sweep._engine.modal", 1), ("harvester_sweep", 0))
+
+_shared: list[Path] = []  # the folder of the run's markers, one file per part compiled
+_finished: set[int] = set()
 
 
-def pytest_sessionstart(session):
+def _done(k: int) -> bool:
+    if k not in _finished and (_shared[0] / str(k)).exists():
+        _finished.add(k)
+    return k in _finished
+
+
+def _wait(parts) -> None:
+    """Wait until every part of ``parts`` is compiled (or WAIT has passed)."""
+    deadline = time.monotonic() + WAIT
+    while not all(_done(k) for k in parts) and time.monotonic() < deadline:
+        time.sleep(1.0)
+
+
+def _part_of(module: str):
+    for prefix, k in _OWNERS:
+        if module == prefix or module.startswith(prefix + "."):
+            return k
+    return None
+
+
+def _waiting_for_parts() -> None:
+    """From now on in this worker: numba compiling a function of a part not yet compiled,
+    and starting a process, first wait for the parts (see the module's docstring)."""
+    from numba.core import sigutils
+    from numba.core.dispatcher import Dispatcher
+
+    compile_ = Dispatcher.compile
+
+    def compile(self, sig):
+        k = _part_of(getattr(self.py_func, "__module__", "") or "")
+        if k is not None and not _done(k):
+            args, _ = sigutils.normalize_signature(sig)
+            if self.overloads.get(tuple(args)) is None:
+                _wait([k])
+        return compile_(self, sig)
+
+    Dispatcher.compile = compile
+    popen_init, start = subprocess.Popen.__init__, multiprocessing.process.BaseProcess.start
+
+    def init(self, *args, **kwargs):
+        _wait(range(len(PARTS)))
+        popen_init(self, *args, **kwargs)
+
+    def start_(self):
+        _wait(range(len(PARTS)))
+        start(self)
+
+    subprocess.Popen.__init__ = init
+    multiprocessing.process.BaseProcess.start = start_
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_finish(session):
+    # (after xdist has sent this worker's collection, so that the tests are dealt out while
+    # the workers compile)
     worker = getattr(session.config, "workerinput", None)
     if worker is None or worker["workercount"] < 2:
         return
     index, count = int(worker["workerid"].removeprefix("gw")), worker["workercount"]
-    shared = Path(tempfile.gettempdir()) / f"harvester-sweep-compiled-{worker['testrunuid']}"
-    shared.mkdir(exist_ok=True)
+    _shared.append(Path(tempfile.gettempdir())
+                   / f"harvester-sweep-compiled-{worker['testrunuid']}")
+    _shared[0].mkdir(exist_ok=True)
     for k in range(index, len(PARTS), count):
         try:
             PARTS[k]()
         except Exception as error:  # (it fails again, and is reported, in the tests that need it)
             warnings.warn(f"compiling {PARTS[k].__name__} before the tests failed: {error!r}")
         finally:
-            (shared / str(k)).touch()
-    deadline = time.monotonic() + WAIT
-    while (not all((shared / str(k)).exists() for k in range(len(PARTS)))
-           and time.monotonic() < deadline):
-        time.sleep(1.0)
+            (_shared[0] / str(k)).touch()
+    _waiting_for_parts()
+
+
+def pytest_runtest_setup(item):
+    # (a notebook runs in a kernel of its own, which would compile what it lacks)
+    if _shared and item.path.suffix == ".ipynb":
+        _wait(range(len(PARTS)))
