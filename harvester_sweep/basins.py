@@ -41,6 +41,7 @@ from ._engine import MAX_ORBIT_PERIOD, METRIC, PARAM, SERIES, STATE, STATUS
 from .datasets import grid_coordinates, run_attributes
 from .linear import linear_response
 from .models import tip_mass
+from .orbits import scale_floors
 from .outputs import OUTPUTS, metric_index
 from .packing import check_runnable, pack_points
 from .parameters import (
@@ -419,8 +420,9 @@ def _attractors(results, part: slice, rows: np.ndarray) -> dict:
     n = int(rows[0, PARAM.steps])
     section = np.rint(rows[:, PARAM.phase] / (2.0 * math.pi) * n).astype(np.int64)
     left = np.flatnonzero(status == STATUS.settled)
-    scale = np.max(np.abs(results.strobes[part][left][..., :3]), axis=(0, 1)) + 1e-300 \
-        if left.size else None
+    # (floored as the solver floors its scales: the orbit of an unforced device is rest)
+    scale = np.maximum(np.max(np.abs(results.strobes[part][left][..., :3]), axis=(0, 1)),
+                       scale_floors(rows[:1], 3)[0]) if left.size else None
     groups = []
     while left.size:
         head = left[0]

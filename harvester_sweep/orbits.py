@@ -140,6 +140,11 @@ SLICE = 64
 LOCATED = 0.05
 #: Runs of the error estimate at twice the steps before it is given up [-].
 ESTIMATE_RUNS = 4
+#: A component's scale, the orbit's amplitude, is kept at least this share of its first
+#: one (from the motion without the stop, the gap's thousandth at least): an unforced
+#: device's orbit is rest, whose own amplitudes are 0, and a motion decaying to it was
+#: measured against its own size, shrinking with it, so that it never settled [-].
+SCALE_FLOOR = 1e-6
 SAMPLES = MAX_ORBIT_PERIOD + 1  # stroboscopic samples read back from each run
 
 # A point's phase: what its next run is. A phase that runs has one function that takes a
@@ -219,6 +224,7 @@ _COMPONENTS = layout("Components", (
     ("t0", "trajectory state at the attempt's start"),
     ("t1", "... and t1_periods periods later"),
     ("scale", "component scales"),
+    ("floor", "the least each scale may be: SCALE_FLOOR times the first"),
 ))
 #: A point's monodromies (_Points.jacobians: (n, 3, D, D)).
 _JACOBIANS = layout("Jacobians", (
@@ -465,6 +471,14 @@ def _points(rows, states, successors, estimated, accuracy, max_steps, settling) 
         calls=np.zeros(1, dtype=np.int64))
 
 
+def scale_floors(rows, size=N_RIGID):
+    """The least each component's scale may be (orbits of packed rows ``rows`` (n,
+    len(PARAM))): SCALE_FLOOR times the first scales solve_orbits gives them, from their
+    motion without the stop; (n, size) [m, m/s, V, ...]."""
+    rows = np.asarray(rows, dtype=float)
+    return SCALE_FLOOR * period_map.orbit_scales(rows, _linear_amplitude(rows), 0.0, size)
+
+
 def _linear_amplitude(rows):
     """Displacement amplitudes [m] of the points before any run: the response without the
     stop (the model's linear system's phasor), floored at the gap."""
@@ -523,6 +537,7 @@ def _set_up(T, amplitude, guessed, extent, heads):
     for i in range(T.rows.shape[0]):
         period_map.point_scales(T.rows[i], amplitude[i], 0.0,
                                 T.components[i, _COMPONENTS.scale])
+        T.components[i, _COMPONENTS.floor] = SCALE_FLOOR * T.components[i, _COMPONENTS.scale]
         if guessed:
             T.flags[i, _FLAG.touched] = reaches_a_stop(T.rows[i], extent[i, 0], extent[i, 1])
     for i in heads:
@@ -972,6 +987,7 @@ def _newton_step(T, i, m, centre, jac, ok):
     for c in range(size):
         if not (ok and scale[c] > 0):
             scale[c] = T.components[i, _COMPONENTS.scale, c]
+        scale[c] = max(scale[c], T.components[i, _COMPONENTS.floor, c])
     residual = centre[:size] - T.states[i, _STATES.y, :size]
     step = np.zeros(size)
     cond = np.inf

@@ -34,6 +34,23 @@ def test_one_attractor_far_below_the_band():
     assert float(ds.power[0]) == pytest.approx(abs(V) ** 2 / (2 * p["resistance"]), rel=1e-5)
 
 
+def test_an_unforced_device_has_one_attractor_rest():
+    """With no base motion the device only loses energy (damping, the load, the contact's
+    damping), so every start, a box of micrometres and millimetres a second and a shock,
+    ends at rest: one attractor, no power, no motion. Before, every start was counted not
+    settled: its decaying motion was measured against its own amplitude, which shrank
+    with it."""
+    for kwargs in ({"samples": 8}, {"samples": 4, "shock": 0.5}):
+        ds = basin_fractions("paper", amplitude=0.0, **kwargs)
+        assert ds.sizes["attractor"] == 1, ds
+        assert float(ds.basin_fraction[0]) == 1.0
+        assert float(ds.fraction_not_settled) == float(ds.fraction_diverged) == 0.0
+        assert int(ds.orbit_period[0]) == 1
+        assert float(ds.impact_basin_fraction) == 0.0
+        assert abs(float(ds.x_max[0])) < 1e-15 and abs(float(ds.x_min[0])) < 1e-15
+        assert float(ds.power[0]) < 1e-30
+
+
 def test_where_no_start_settles_the_share_that_strikes_is_unknown(tmp_path, capsys):
     """Three periods settle no start of the band: every start is counted not settled, and
     the impact basin fraction and its error are NaN, where they read 0 +- 0 (a map of
