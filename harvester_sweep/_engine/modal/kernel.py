@@ -1052,8 +1052,8 @@ def _measure(tables, r, z, st, periods, status, metrics, buf, D, S, K):
 
 
 #: What take_points does with each point it takes: run it to steady state and measure its
-#: orbit (settle_points), measure its orbit over given periods (measure_points), or run
-#: its period map with tangents carried along (map_points).
+#: orbit, measure its orbit over given periods, or run its period map with tangents
+#: carried along.
 SETTLE, MEASURE, MAP = 0, 1, 2
 
 
@@ -1075,9 +1075,8 @@ def take_points(kind, crows, rrows, z, periods, metrics, strobes, tangents, ok, 
 
     Each point is run alone, so its numbers do not depend on the threads or the other
     points; the threads share one counter, so that one slow point does not hold back
-    others. One compiled entry for the three kinds and for every thread count: its
-    machine code, and with it the run's threads, are the caller's (a parallel loop for
-    each kind compiled the engine's calls three times more)."""
+    others. The caller starts the threads (modal_map), and one compiled entry serves the
+    three kinds: a parallel loop for each kind compiled again, in each, all it calls."""
     n = crows.shape[0]
     i = fetch_add(taken, 0)
     while i < n and taken[1] == 0:
