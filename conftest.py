@@ -8,9 +8,9 @@ parts k, k + workers, ...) once the tests are collected and dealt out, and then 
 tests. A part another worker is still compiling is waited for, not compiled again: in a
 worker that has done its share, numba's compiling of a function of such a part waits until
 the part is in the cache (and then loads it), and so does starting another process (a
-command-line test, a Dask worker, a notebook's kernel), which would compile what it lacks.
-So the worker that finishes first runs the tests that need only its part while the other
-compiles. The cache is safe for processes that compile at once (harvester_sweep.jit), so a
+command-line test, a Dask worker, a notebook's kernel, which jupyter_client starts with
+subprocess.Popen), which would compile what it lacks. So the worker that finishes first
+runs the tests that need only its part while the other compiles. The cache is safe for processes that compile at once (harvester_sweep.jit), so a
 worker that gives up waiting only compiles again. Without xdist nothing is done here: the
 first test that needs an engine compiles it.
 """
@@ -45,9 +45,9 @@ def _beam() -> None:
     beam_scene("bimorph_tip", periods=1, n_modes=1, gap=1e-6, frequency=230.0)
 
 
-#: The parts, each with the modules whose compiled functions it holds (the first prefix
-#: that a function's module starts with names its part).
 PARTS = (_tip_mass, _beam)
+#: The part that holds each module's compiled functions, by the first prefix of PARTS'
+#: index that the module's name starts with.
 _OWNERS = (("harvester_sweep._engine.modal", 1), ("harvester_sweep", 0))
 
 _shared: list[Path] = []  # the folder of the run's markers, one file per part compiled
@@ -124,9 +124,3 @@ def pytest_collection_finish(session):
         finally:
             (_shared[0] / str(k)).touch()
     _waiting_for_parts()
-
-
-def pytest_runtest_setup(item):
-    # (a notebook runs in a kernel of its own, which would compile what it lacks)
-    if _shared and item.path.suffix == ".ipynb":
-        _wait(range(len(PARTS)))
