@@ -10,8 +10,9 @@ worker that has done its share, numba's compiling of a function of such a part w
 the part is in the cache (and then loads it), and so does starting another process (a
 command-line test, a Dask worker, a notebook's kernel, which jupyter_client starts with
 subprocess.Popen), which would compile what it lacks. So the worker that finishes first
-runs the tests that need only its part while the other compiles. The cache is safe for processes that compile at once (harvester_sweep.jit), so a
-worker that gives up waiting only compiles again. Without xdist nothing is done here: the
+runs the tests that need only its part while the other compiles. The cache is safe for
+processes that compile at once (harvester_sweep.jit), so a worker that gives up waiting
+only compiles again. Without xdist nothing is done here: the
 first test that needs an engine compiles it.
 """
 

@@ -49,8 +49,9 @@ from .version import __version__
 #: first choice [-].
 MAX_LEVELS = 5
 #: The metrics whose change at halved steps is the error estimate (relative to their own
-#: size; the extremes of displacement relative to the larger of them) [-].
-ESTIMATED = ("power", "v_peak", "x_max", "x_min", "root_strain_max")
+#: size; the extremes of displacement relative to the larger of them) [-]. A rigid stop's
+#: stop_face_max is 0 at every step, and adds nothing.
+ESTIMATED = ("power", "v_peak", "x_max", "x_min", "root_strain_max", "stop_face_max")
 _SETTLED, _NOT_SETTLED, _DIVERGED = 0, 1, 2
 #: Periods of transient before Newton on the period map takes over [-].
 TRANSIENT = 24

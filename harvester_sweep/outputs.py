@@ -153,8 +153,9 @@ _OUTPUTS = (
            "was found (the Newton iterates and their perturbed copies not counted)", "int32"),
     # made around the engine by the periodic-orbit solver
     Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max and "
-           "x_min (and root_strain_max for the beam): their change when the orbit is solved "
-           "again at twice the steps per period (the beam: and half the contact step)",
+           "x_min (and root_strain_max and stop_face_max for the beam): their change when "
+           "the orbit is solved again at twice the steps per period (the beam: and half the "
+           "contact step)",
            comment="NaN where not estimated or not settled", where="run"),
     Output("spectral_radius", "1", "largest modulus of the Floquet multipliers: the orbit "
            "is stable below 1", comment=_NOT_SETTLED, where="run"),
