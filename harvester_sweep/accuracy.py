@@ -35,14 +35,18 @@ def halving_error(coarse, fine):
     """Error estimate [-] of the metric row ``coarse`` of a run from the row ``fine`` of
     its rerun at twice the steps per period (engine metric rows).
 
-    The largest relative change of ``power`` and ``v_peak`` and of ``x_max`` and ``x_min``
-    (relative to the displacement amplitude): with RK4's 4th order the coarse run's own
-    error is about 16/15 of it.
+    The largest relative change of ``power``, ``v_peak`` and a moving stop's
+    ``stop_displacement_max`` (relative to their own size; a rigid stop's is 0 at every
+    step, and adds nothing) and of ``x_max`` and ``x_min`` (relative to the displacement
+    amplitude): with RK4's 4th order the coarse run's own error is about 16/15 of it.
     """
     amplitude = 0.5 * (fine[METRIC.x_max] - fine[METRIC.x_min])
     out = _change(coarse[METRIC.power], fine[METRIC.power], abs(fine[METRIC.power]))
     out = np.maximum(out, _change(coarse[METRIC.v_peak], fine[METRIC.v_peak],
                                abs(fine[METRIC.v_peak])))
+    out = np.maximum(out, _change(coarse[METRIC.stop_displacement_max],
+                               fine[METRIC.stop_displacement_max],
+                               abs(fine[METRIC.stop_displacement_max])))
     out = np.maximum(out, _change(coarse[METRIC.x_max], fine[METRIC.x_max], amplitude))
     return np.maximum(out, _change(coarse[METRIC.x_min], fine[METRIC.x_min], amplitude))
 

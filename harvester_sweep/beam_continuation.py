@@ -516,10 +516,11 @@ def _dataset(f: _Map, branches: list, parameter: str, preset) -> xr.Dataset:
                              OUTPUTS["orbit_period"].attrs),
             "error_estimate": (("point",), column("estimate"), {
                 **OUTPUTS["error_estimate"].attrs,
-                "comment": "the change of power, v_peak, x_max, x_min and root_strain_max "
-                           "when the point is corrected again at twice its steps with the "
-                           "parameter held (normal to the branch where that fails, as at a "
-                           "fold); NaN where no correction at twice the steps converged"}),
+                "comment": "the change of power, v_peak, x_max, x_min, root_strain_max and "
+                           "stop_face_max when the point is corrected again at twice its "
+                           "steps with the parameter held (normal to the branch where that "
+                           "fails, as at a fold); NaN where no correction at twice the steps "
+                           "converged"}),
             "steps_per_period": (("point",), column("steps").astype("i8"),
                                  OUTPUTS["steps_per_period"].attrs),
             "contact_step": (("point",), column("substep"), OUTPUTS["contact_step"].attrs),

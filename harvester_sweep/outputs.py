@@ -152,8 +152,9 @@ _OUTPUTS = (
     Output("periods_run", "1", "forcing periods of the motion integrated before its orbit "
            "was found (the Newton iterates and their perturbed copies not counted)", "int32"),
     # made around the engine by the periodic-orbit solver
-    Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max and "
-           "x_min (and root_strain_max and stop_face_max for the beam): their change when "
+    Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max, "
+           "x_min and a moving stop's stop_displacement_max (the beam: root_strain_max and "
+           "stop_face_max too): their change when "
            "the orbit is solved again at twice the steps per period (the beam: and half the "
            "contact step)",
            comment="NaN where not estimated or not settled", where="run"),

@@ -3,6 +3,7 @@ alone are the orbits the up and down sweeps reach through the hysteresis band.""
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 
@@ -52,3 +53,18 @@ def test_a_bad_seed_is_refused_in_one_line(seed):
     from and then failed as the dataset's netCDF attribute, after the solves."""
     with pytest.raises(ParameterError, match=r"seed \[-\] = .*: must be an integer in 0"):
         beam_basins("bimorph_tip", samples=2, seed=seed, n_modes=1)
+
+
+def test_the_same_seed_gives_the_same_numbers_on_any_thread_count():
+    """Each start's run is the same bits on one thread as on two (the modal engine's
+    points run alone, whichever thread takes them)."""
+    threads = numba.get_num_threads()
+    first = beam_basins("bimorph_tip", samples=32, seed=0, **BAND)
+    numba.set_num_threads(1)
+    try:
+        again = beam_basins("bimorph_tip", samples=32, seed=0, **BAND)
+    finally:
+        numba.set_num_threads(threads)
+    assert first.sizes["attractor"] == 2
+    for name in first.data_vars:
+        np.testing.assert_array_equal(first[name].values, again[name].values, err_msg=name)
