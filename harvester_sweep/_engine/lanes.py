@@ -26,6 +26,7 @@ from ..models import hertz
 from ..models.tip_mass import (
     Coefficients,
     contact_force,
+    contact_force_rate,
     derivatives,
     free_step_map,
     in_contact,
@@ -736,7 +737,7 @@ def _turns_only(L, j, it):
     dV, dVn = voltage_rate(V, v, irc, thc), voltage_rate(Vn, vn, irc, thc)
     fc = L[LANE.fc + j]
     booking.extrema(L, j, x, v, V, dV, xn, vn, Vn, dVn, span, L[LANE.fc_previous + j], fc,
-                    0.0, L[LANE.sign + j] > 0.0, near)
+                    0.0, 0.0, 0.0, L[LANE.sign + j] > 0.0, near)
     L[LANE.q + j] += hermite.v2_integral(V, dV, Vn, dVn, L[LANE.half_h + j], L[LANE.h2_6 + j])
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
     L[LANE.fc_previous + j], L[LANE.fc + j] = fc, 0.0
@@ -859,14 +860,32 @@ def _finish_rigid(L, j, it):
         _contact_step_tangents(L, j, it, x, v, V, s0, c0)
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = contact_force(xn, vn, on * L[LANE.kh + j], g, ch)
+    dfc, dfcn = 0.0, 0.0
+    if fcn > 0.0 and booking.at_peak(L, j, fcp, fc, fcn):
+        dfc, dfcn = _peak_rates(L, j, x, v, V, xn, vn, Vn, s0, c0, on, ch)
     booking.extrema(L, j, x, v, V, dV, xn, vn, Vn, voltage_rate(Vn, vn, irc, thc), h, fcp, fc,
-                    fcn, L[LANE.sign + j] > 0.0, g if khm > 0.0 else np.inf)
+                    fcn, dfc, dfcn, L[LANE.sign + j] > 0.0, g if khm > 0.0 else np.inf)
     L[LANE.x + j], L[LANE.v + j], L[LANE.voltage + j] = xn, vn, Vn
     L[LANE.fc_previous + j], L[LANE.fc + j] = fc, fcn
     L[LANE.on + j], L[LANE.ch + j], L[LANE.fine + j] = on, ch, fine
     L[LANE.q + j] += dq
     if xn < L[LANE.flip_below + j]:  # nearer the other stop (out of this one's reach)
         mirror(L, j)
+
+
+@njit(**JIT)
+def _peak_rates(L, j, x, v, V, xn, vn, Vn, s0, c0, on, ch):
+    """dF_c/dt [N/s] at the start and the end of lane ``j``'s step from (x, v, V) at forcing
+    phase sin, cos = s0, c0 to (xn, vn, Vn), in contact state ``on`` with damping ``ch``
+    [s/m]: what the quartic of a force peak takes (booking.peak)."""
+    g, kh = L[LANE.gap + j], on * L[LANE.kh + j]
+    k = Coefficients(L[LANE.wn2 + j], L[LANE.cm + j], L[LANE.thm + j], on * L[LANE.khm + j],
+                     g, ch, L[LANE.irc + j], L[LANE.thc + j])
+    A = L[LANE.amplitude + j]
+    s1 = s0 * L[LANE.cos_step + j] + c0 * L[LANE.sin_step + j]
+    a0, _ = derivatives(x, v, V, A * s0, k)
+    a1, _ = derivatives(xn, vn, Vn, A * s1, k)
+    return contact_force_rate(x, v, a0, kh, g, ch), contact_force_rate(xn, vn, a1, kh, g, ch)
 
 
 @njit(**JIT)

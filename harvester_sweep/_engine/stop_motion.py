@@ -26,7 +26,7 @@ import numpy as np
 
 from ..jit import JIT, njit
 from ..models import hertz
-from ..models.tip_mass import contact_force, in_contact, voltage_rate
+from ..models.tip_mass import contact_force, contact_force_rate, in_contact, voltage_rate
 from . import booking, hermite
 from .layouts import LANE
 from .rk4 import GRADED, THETA_TOL, WHOLE, forcing
@@ -191,8 +191,15 @@ def step(L, j):
     xn, vn, Vn, xsn, vsn = yn
     fc, fcp = L[LANE.fc + j], L[LANE.fc_previous + j]
     fcn = contact_force(xn - xsn, vn - vsn, on * kh, g, ch)  # of the relative motion
+    dfc, dfcn = 0.0, 0.0
+    if fcn > 0.0 and booking.at_peak(L, j, fcp, fc, fcn):  # (its rates: booking.peak)
+        s1 = s0 * L[LANE.cos_step + j] + c0 * L[LANE.sin_step + j]
+        a0, b0, _ = coupled_derivatives(x, v, V, xs, vs, A * s0, k, on)
+        a1, b1, _ = coupled_derivatives(xn, vn, Vn, xsn, vsn, A * s1, k, on)
+        dfc = contact_force_rate(x - xs, v - vs, a0 - b0, on * kh, g, ch)
+        dfcn = contact_force_rate(xn - xsn, vn - vsn, a1 - b1, on * kh, g, ch)
     booking.extrema(L, j, x, v, V, voltage_rate(V, v, irc, thc), xn, vn, Vn,
-                    voltage_rate(Vn, vn, irc, thc), h, fcp, fc, fcn, True, np.inf)
+                    voltage_rate(Vn, vn, irc, thc), h, fcp, fc, fcn, dfc, dfcn, True, np.inf)
     smax = max(L[LANE.stop_x_max + j], abs(xsn))
     if vs > 0.0 >= vsn or vs < 0.0 <= vsn:
         smax = max(smax, abs(hermite.extremum(xs, vs, xsn, vsn, h)))

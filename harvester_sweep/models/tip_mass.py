@@ -95,6 +95,14 @@ def contact_force(x, v, kh_on, g, ch):
 
 
 @njit(inline="always", **JIT)
+def contact_force_rate(x, v, a, kh_on, g, ch):
+    """dF_c/dt [N/s] at (x [m], v [m/s], a [m/s^2]: the motion relative to the stop where
+    the stop moves); ``kh_on`` as for :func:`contact_force`."""
+    _, by_delta, by_rate = hertz.force_and_slopes(kh_on, x - g, v, ch)
+    return by_delta * v + by_rate * a
+
+
+@njit(inline="always", **JIT)
 def rk4_increment(x, v, V, dt, f0, fm, f1, k, contact=True):
     """The increments of x, v, V over one classical RK4 step of length dt [s], the
     integral of V^2 over the step by the stages' quadrature [V^2 s] and the acceleration
