@@ -1,8 +1,8 @@
 """How right the metrics that ``error_estimate`` does not cover are: the contact force's
 peak and the approach velocities, at the automatic step, against the same orbit at 32768
 steps a period (whose own error is below 1e-7 of each), with SciPy's DOP853 at rtol 1e-12
-beside it (tests/helpers.reference_orbit; its contact force peak is that of 40001 samples
-of a period, so good to a few 1e-6 only).
+beside it (tests/helpers.reference_orbit; its contact force peak searched on the dense
+output around the largest of 40001 samples).
 
     python -m benchmarks.metric_accuracy      # prints a Markdown table
 

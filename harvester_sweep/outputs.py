@@ -112,9 +112,9 @@ BIFURCATION_FLAGS = {"flag_values": np.arange(len(BIFURCATIONS), dtype="i1"),
 
 _NO_IMPACT = "NaN when the orbit has no impact (impacts_per_period = 0)"
 _NOT_SETTLED = "NaN where the point did not settle"
-_PEAK = ("the vertex of the parabola through the force at three step ends: its error falls "
-         "about as the step squared, is not in error_estimate and is far larger "
-         "(docs/numerics.md)")
+_PEAK = ("the top of the quartic through the force at three step ends and its rate at two: "
+         "its error falls as RK4's; not in error_estimate, as near a grazing the force "
+         "tends to 0 (docs/numerics.md)")
 _APPROACH = ("not in error_estimate: at a slow impact its error can be far larger "
              "(docs/numerics.md)")
 _OUTPUTS = (
