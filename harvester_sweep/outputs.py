@@ -154,9 +154,8 @@ _OUTPUTS = (
     # made around the engine by the periodic-orbit solver
     Output("error_estimate", "1", "estimated relative error of power, v_peak, x_max, "
            "x_min and a moving stop's stop_displacement_max (the beam: root_strain_max and "
-           "stop_face_max too): their change when "
-           "the orbit is solved again at twice the steps per period (the beam: and half the "
-           "contact step)",
+           "stop_face_max too): their change when the orbit is solved again at twice the "
+           "steps per period (the beam: and half the contact step)",
            comment="NaN where not estimated or not settled", where="run"),
     Output("spectral_radius", "1", "largest modulus of the Floquet multipliers: the orbit "
            "is stable below 1", comment=_NOT_SETTLED, where="run"),
