@@ -112,19 +112,18 @@ class Reference:
         return y, pieces
 
 
-def _force_peak(ref, pieces, t, force):
-    """The contact force's largest value [N]: around its largest sample at times ``t``
-    [s], searched on the dense output of each piece of the orbit (SciPy's bounded scalar
-    minimiser, to 1e-15 of the period); the samples alone fall a few 1e-6 short of a peak
-    that lasts a thirtieth of the period."""
-    k = int(np.argmax(force))
-    best = float(force[k])
-    for sol, _ in pieces:
+def peak_on_dense_output(force, pieces, t, k):
+    """The largest value [N] of ``force(y)`` (y a state of the dense output) around the
+    sample k of times ``t`` [s], searched on the dense output of each piece of a run that
+    holds t[k - 1] ... t[k + 1] (SciPy's bounded scalar minimiser, to 1e-15 of the run):
+    samples alone fall a few 1e-6 short of a contact force's peak that lasts a thirtieth of
+    the period."""
+    best = -np.inf
+    for sol in pieces:
         lo, hi = max(t[max(k - 1, 0)], sol.t[0]), min(t[min(k + 1, t.size - 1)], sol.t[-1])
-        if best > 0.0 and lo < hi:
-            found = minimize_scalar(lambda s, sol=sol: -ref.contact_force(*sol.sol(s)[:2]),
-                                    bounds=(lo, hi), method="bounded",
-                                    options={"xatol": 1e-15 * t[-1]})
+        if lo < hi:
+            found = minimize_scalar(lambda s, sol=sol: -force(sol.sol(s)), bounds=(lo, hi),
+                                    method="bounded", options={"xatol": 1e-15 * t[-1]})
             best = max(best, -float(found.fun))
     return best
 
@@ -152,7 +151,9 @@ def reference_orbit(result, periods_to_settle=40, method="DOP853", rtol=1e-12):
         "v_peak": np.abs(samples[2]).max(),
         "x_max": samples[0].max(),
         "x_min": samples[0].min(),
-        "contact_force_max": _force_peak(ref, pieces, t, force),
+        "contact_force_max": max(force.max(), peak_on_dense_output(
+            lambda y: ref.contact_force(y[0], y[1]), [sol for sol, _ in pieces], t,
+            int(np.argmax(force)))),
         "approach_velocity": float(np.mean(ref.onset_velocities)),
         "approach_velocity_min": float(np.min(ref.onset_velocities)),
         "impacts_per_period": len(ref.onset_velocities),

@@ -7,10 +7,9 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from scipy.optimize import minimize_scalar
 
 from harvester_sweep import ParameterError, resolve_parameters, run_scene
-from tests.helpers import beam, lankarani_nikravesh_damping
+from tests.helpers import beam, lankarani_nikravesh_damping, peak_on_dense_output
 
 
 def support(mass, frequency, damping_ratio):
@@ -88,24 +87,12 @@ class MovingStop:
 
     def peaks(self, force):
         """The largest force of each contact (each run of positive samples of the last
-        run) [N]: around its largest sample, searched on the dense output (SciPy's bounded
-        scalar minimiser, to 1e-15 of the run); the samples alone fall a few 1e-6 short."""
+        run) [N], searched on the dense output around its largest sample."""
         on = np.flatnonzero(force > 0)
         runs = np.split(on, np.flatnonzero(np.diff(on) > 1) + 1)
-        out, t = [], self.times
-        for run in (run for run in runs if run.size):
-            k = run[np.argmax(force[run])]
-            best = force[k]
-            for sol in self.pieces:
-                lo = max(t[max(k - 1, 0)], sol.t[0])
-                hi = min(t[min(k + 1, t.size - 1)], sol.t[-1])
-                if lo < hi:
-                    found = minimize_scalar(
-                        lambda s, sol=sol: -self.force(*sol.sol(s)[[0, 1, 3, 4]]),
-                        bounds=(lo, hi), method="bounded", options={"xatol": 1e-15 * t[-1]})
-                    best = max(best, -found.fun)
-            out.append(best)
-        return np.array(out)
+        return np.array([max(force[run].max(), peak_on_dense_output(
+            lambda y: self.force(*y[[0, 1, 3, 4]]), self.pieces, self.times,
+            run[np.argmax(force[run])])) for run in runs if run.size])
 
 
 @pytest.mark.parametrize("case", [SOFT, STIFF], ids=["soft", "stiff"])
