@@ -112,17 +112,17 @@ class Reference:
         return y, pieces
 
 
-def peak_on_dense_output(force, pieces, t, k):
-    """The largest value [N] of ``force(y)`` (y a state of the dense output) around the
-    sample k of times ``t`` [s], searched on the dense output of each piece of a run that
-    holds t[k - 1] ... t[k + 1] (SciPy's bounded scalar minimiser, to 1e-15 of the run):
-    samples alone fall a few 1e-6 short of a contact force's peak that lasts a thirtieth of
-    the period."""
+def peak_on_dense_output(of, pieces, t, k):
+    """The largest value of ``of(y)`` (y a state of the dense output: a force [N], a
+    displacement [m]) around the sample k of times ``t`` [s], searched on the dense output
+    of each piece of a run that holds t[k - 1] ... t[k + 1] (SciPy's bounded scalar
+    minimiser, to 1e-15 of the run): samples alone fall a few 1e-6 short of a contact
+    force's peak that lasts a thirtieth of the period."""
     best = -np.inf
     for sol in pieces:
         lo, hi = max(t[max(k - 1, 0)], sol.t[0]), min(t[min(k + 1, t.size - 1)], sol.t[-1])
         if lo < hi:
-            found = minimize_scalar(lambda s, sol=sol: -force(sol.sol(s)), bounds=(lo, hi),
+            found = minimize_scalar(lambda s, sol=sol: -of(sol.sol(s)), bounds=(lo, hi),
                                     method="bounded", options={"xatol": 1e-15 * t[-1]})
             best = max(best, -float(found.fun))
     return best
