@@ -112,13 +112,15 @@ class Reference:
         return y, pieces
 
 
-def peak_on_dense_output(of, pieces, t, k):
+def dense_extreme(values, of, pieces, t, k=None):
     """The largest value of ``of(y)`` (y a state of the dense output: a force [N], a
-    displacement [m]) around the sample k of times ``t`` [s], searched on the dense output
-    of each piece of a run that holds t[k - 1] ... t[k + 1] (SciPy's bounded scalar
-    minimiser, to 1e-15 of the run): samples alone fall a few 1e-6 short of a contact
-    force's peak that lasts a thirtieth of the period."""
-    best = -np.inf
+    displacement [m], a voltage [V]) around the sample k of times ``t`` [s] (unset: the
+    largest of ``values``, ``of`` at those times), searched on the dense output of each
+    piece of a run that holds t[k - 1] ... t[k + 1] (SciPy's bounded scalar minimiser, to
+    1e-15 of the run): samples alone fall a few 1e-6 short of a contact force's peak that
+    lasts a thirtieth of the period, up to 1e-7 of a swing's top."""
+    k = int(np.argmax(values)) if k is None else int(k)
+    best = float(values[k])
     for sol in pieces:
         lo, hi = max(t[max(k - 1, 0)], sol.t[0]), min(t[min(k + 1, t.size - 1)], sol.t[-1])
         if lo < hi:
@@ -143,17 +145,17 @@ def reference_orbit(result, periods_to_settle=40, method="DOP853", rtol=1e-12):
         inside = (t >= sol.t[0]) & (t <= sol.t[-1])
         samples[:, inside] = sol.sol(t[inside])[:3]
     force = np.array([ref.contact_force(x, v) for x, v in samples[:2].T])
+    sols = [sol for sol, _ in pieces]
     return {
         "start": start,
         "end": end[:3],
         "v_rms": math.sqrt(end[3] / T),
         "power": end[3] / T / p["resistance"],
-        "v_peak": np.abs(samples[2]).max(),
-        "x_max": samples[0].max(),
-        "x_min": samples[0].min(),
-        "contact_force_max": max(force.max(), peak_on_dense_output(
-            lambda y: ref.contact_force(y[0], y[1]), [sol for sol, _ in pieces], t,
-            int(np.argmax(force)))),
+        "v_peak": dense_extreme(np.abs(samples[2]), lambda y: abs(y[2]), sols, t),
+        "x_max": dense_extreme(samples[0], lambda y: y[0], sols, t),
+        "x_min": -dense_extreme(-samples[0], lambda y: -y[0], sols, t),
+        "contact_force_max": dense_extreme(force, lambda y: ref.contact_force(y[0], y[1]),
+                                           sols, t),
         "approach_velocity": float(np.mean(ref.onset_velocities)),
         "approach_velocity_min": float(np.min(ref.onset_velocities)),
         "impacts_per_period": len(ref.onset_velocities),

@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from harvester_sweep import ParameterError, resolve_parameters, run_scene
-from tests.helpers import beam, lankarani_nikravesh_damping, peak_on_dense_output
+from tests.helpers import beam, dense_extreme, lankarani_nikravesh_damping
 
 
 def support(mass, frequency, damping_ratio):
@@ -88,17 +88,16 @@ class MovingStop:
     def extreme(self, samples, of):
         """The largest value of ``of(y)`` (y a state) over the last run: around the largest
         of its ``samples``, searched on the dense output."""
-        k = int(np.argmax(samples))
-        return max(samples[k], peak_on_dense_output(of, self.pieces, self.times, k))
+        return dense_extreme(samples, of, self.pieces, self.times)
 
     def peaks(self, force):
         """The largest force of each contact (each run of positive samples of the last
         run) [N], searched on the dense output around its largest sample."""
         on = np.flatnonzero(force > 0)
         runs = np.split(on, np.flatnonzero(np.diff(on) > 1) + 1)
-        return np.array([max(force[run].max(), peak_on_dense_output(
-            lambda y: self.force(*y[[0, 1, 3, 4]]), self.pieces, self.times,
-            run[np.argmax(force[run])])) for run in runs if run.size])
+        return np.array([dense_extreme(force, lambda y: self.force(*y[[0, 1, 3, 4]]),
+                                       self.pieces, self.times, run[np.argmax(force[run])])
+                         for run in runs if run.size])
 
 
 @pytest.mark.parametrize("case", [SOFT, STIFF], ids=["soft", "stiff"])
