@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,7 +22,8 @@ from .contact import contact_damping
 from .modal_map import ModalPoint, pack
 from .models import beam as beam_model
 from .models import hertz
-from .parameters import TooStiffError
+from .parameters import StabilityWarning, TooStiffError
+from .timescales import RK4_STABILITY
 
 #: Grid steps per period at least, and per period of the highest bending mode: the grid
 #: looks for touches and samples the outputs, whose extrema and int V^2 dt it
@@ -147,6 +149,14 @@ def first_steps(p: dict, bs: BeamSystem) -> tuple[int, float]:
     substep = p["contact_step"]
     if substep is None:
         substep = contact_duration(p, bs) / SUBSTEPS_PER_CONTACT
+    if p["contact_step"] is not None and p["hertz_stiffness"] > 0:
+        bound, what = contact_step_bound(p, bs)
+        if substep > bound:
+            warnings.warn(
+                f"contact_step = {substep:.3g} s is beyond the estimated RK4 stability bound "
+                f"{RK4_STABILITY}/rate = {bound:.3g} s of {what} (at the expected "
+                "impact): the run may diverge or not settle: use <= "
+                f"{bound:.3g} or leave contact_step unset", StabilityWarning, stacklevel=3)
     count = contact_steps(p, substep)
     if count > most:  # (a contact step of 1e-300 s: a run without end)
         what = (f"contact_step [s] = {substep:.3g}" if p["contact_step"] is not None else
@@ -164,21 +174,41 @@ def contact_steps(p: dict, substep: float) -> float:
     return 1.0 / (p["frequency"] * substep)
 
 
-def contact_duration(p: dict, bs: BeamSystem) -> float:
-    """Estimated duration [s] of an impact: the undamped Hertz contact of the contact
-    point's apparent mass (1 / sum of the squared mode shapes there, the beam's and the
-    rod's) at the approach velocity of the linear response's amplitude there; a forcing
-    period where hertz_stiffness is 0 (no stop: the sub-step then serves no contact)."""
-    if p["hertz_stiffness"] == 0:
-        return 1.0 / p["frequency"]
+def _expected_impact(p: dict, bs: BeamSystem) -> tuple[float, float, float]:
+    """The impact a point's contact estimates expect (hertz_stiffness > 0): the contact
+    point's apparent mass [kg] (1 / sum of the squared mode shapes there, the beam's and
+    the rod's), its approach velocity [m/s] (of the linear response's amplitude there) and
+    the undamped Hertz contact's largest penetration [m] at that velocity."""
     surface = bs.system.surfaces[0]
     mass = 1.0 / float(np.sum(surface ** 2))
     omega = 2 * math.pi * p["frequency"]
     reach = float(np.abs(surface @ bs.linear))
     velocity = max(omega * max(reach - p["gap"], reach * 1e-3), 1e-12)
-    delta = hertz.penetration(0.5 * mass * velocity ** 2, p["hertz_stiffness"])
+    return mass, velocity, hertz.penetration(0.5 * mass * velocity ** 2, p["hertz_stiffness"])
+
+
+def contact_duration(p: dict, bs: BeamSystem) -> float:
+    """Estimated duration [s] of an impact (:func:`_expected_impact`); a forcing period where
+    hertz_stiffness is 0 (no stop: the sub-step then serves no contact)."""
+    if p["hertz_stiffness"] == 0:
+        return 1.0 / p["frequency"]
+    _, velocity, delta = _expected_impact(p, bs)
     # Hertz's impact of a mass: 2.94 delta_max / v
     return 2.94 * delta / velocity
+
+
+def contact_step_bound(p: dict, bs: BeamSystem) -> tuple[float, str]:
+    """The longest contact sub-step [s] inside RK4's stability bound at the expected impact
+    (:func:`_expected_impact`; hertz_stiffness > 0), RK4_STABILITY over the faster of the
+    contact's rates on the apparent mass: its stiffness's sqrt(1.5 k_h delta^0.5 / m) and
+    its damping's k_h delta^1.5 c_h / m; and which rate it is. (The modes' own flow is exact
+    in a sub-step: the contact alone is RK4's.)"""
+    mass, _, delta = _expected_impact(p, bs)
+    kh = p["hertz_stiffness"]
+    rates = {"the contact's stiffness": math.sqrt(1.5 * kh * math.sqrt(delta) / mass),
+             "the contact's damping": kh * delta ** 1.5 * bs.contact_damping / mass}
+    what = max(rates, key=rates.get)
+    return RK4_STABILITY / rates[what], what
 
 
 def pack_beam(p: dict, bs: BeamSystem, steps: int, substep: float) -> ModalPoint:

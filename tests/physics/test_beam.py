@@ -16,10 +16,16 @@ from harvester_sweep import bimorph as bm
 from harvester_sweep import modal_map, run_scene
 from harvester_sweep import rod as rd
 from harvester_sweep._engine import STATUS
-from harvester_sweep.beam_packing import first_steps, pack_beam
+from harvester_sweep.beam_packing import (
+    contact_duration,
+    contact_step_bound,
+    first_steps,
+    pack_beam,
+)
 from harvester_sweep.beam_parameters import bimorph, resolve_beam_parameters
 from harvester_sweep.beam_runs import beam_scene, solve_beam, system_of
 from harvester_sweep.models import beam as beam_model
+from harvester_sweep.parameters import StabilityWarning
 
 
 def _solve(preset="bimorph_tip", **overrides):
@@ -93,6 +99,28 @@ def test_a_contact_step_too_short_to_run_is_refused_in_one_line(overrides, words
     with pytest.raises(TooStiffError) as info:
         solve_beam([p])
     assert str(info.value).startswith(f"too stiff: {words}") and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("preset, overrides, rate", [
+    ("bimorph_tip", dict(n_modes=1, frequency=220.0), "stiffness"),
+    ("mak_rod", dict(frequency=150.0), "damping")])
+def test_a_contact_step_beyond_rk4s_bound_is_warned_of(preset, overrides, rate):
+    """A contact sub-step beyond RK4's stability bound at the expected impact warns, naming
+    the rate that sets the bound, as an explicit tip-mass step does; the automatic one,
+    and one within the bound, do not. At mak_rod's 150 Hz the bound (set by the contact's
+    damping) is a fifth of the contact's duration: a sub-step of half the duration left the
+    point unsettled, one of twice it diverged."""
+    p = resolve_beam_parameters(preset, **overrides)
+    bs = system_of(p)
+    bound, what = contact_step_bound(p, bs)
+    assert what == f"the contact's {rate}" and bound < contact_duration(p, bs)
+    with pytest.warns(StabilityWarning, match=r"contact_step = .* s is beyond the estimated "
+                      r"RK4 stability bound 2.5/rate = .* s of the contact's " + rate):
+        first_steps(resolve_beam_parameters(preset, contact_step=1.5 * bound, **overrides), bs)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert first_steps(p, bs)[1] < bound / 10  # (the automatic sub-step)
+        first_steps(resolve_beam_parameters(preset, contact_step=0.9 * bound, **overrides), bs)
 
 
 @pytest.mark.parametrize("levels", [0, 1])
@@ -353,7 +381,8 @@ def test_a_diverged_point_reports_no_values():
     run blew up: a power of 0 W, an x_max of -inf m; its multipliers had imaginary parts
     0); its status and periods run remain."""
     p = resolve_beam_parameters("bimorph_tip", n_modes=1, contact_step=1.0, frequency=220.0)
-    v = solve_beam([p]).values
+    with pytest.warns(StabilityWarning, match="contact_step = 1 s is beyond"):
+        v = solve_beam([p]).values
     assert v["status"][0] == STATUS.diverged and v["periods_run"][0] > 0
     told = {"orbit_period", "status", "periods_run", "steps_per_period", "contact_step"}
     for name in set(v) - told:
@@ -369,6 +398,7 @@ def test_a_diverged_scene_records_no_time_history(preset, overrides):
     overflowed (numpy's warning reached the command line's stderr)."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
+        warnings.simplefilter("ignore", StabilityWarning)  # (contact_step = 1 s: said, and so)
         outputs, series = beam_scene(preset, **overrides)
     assert outputs["status"] == STATUS.diverged
     assert series.sizes["time"] == 0 and np.isnan(float(series["power"]))
