@@ -8,7 +8,7 @@ the same package (the same engine, compiled once), and both follow the paper S-c
 (gap 1 um, 150-300 Hz), a gap branch of the paper scene through both folds (240 Hz,
 0.5-3 um), the strong-coupling frequency branch switched onto its doubled branches
 (gap 3 um, 150-135 Hz, ``period_doubling="switch"``) and the Neimark-Sacker branch of a
-stop on a spring (tests/physics/test_branch_accuracy.py's NS_BRANCH) in turn, each round
+stop on a spring (tests/physics/test_neimark_sacker_accuracy.py's NS_BRANCH) in turn, each round
 all; each figure is the best of the rounds (this machine
 is shared, and its speed drifts from minute to minute: compare within one run). Reported:
 wall time of the branch (the Dataset left out: ``_continue``), points, points whose
@@ -64,7 +64,8 @@ CASES = {
 }
 
 #: The cases of --scan: the Neimark-Sacker branch and the strong-coupling branch through
-#: one period doubling (tests/physics/test_branch_accuracy.py's NS_BRANCH and PD_BRANCH).
+#: one period doubling (NS_BRANCH of tests/physics/test_neimark_sacker_accuracy.py, and
+#: PD_BRANCH of tests/physics/test_branch_accuracy.py).
 SCAN = {
     "stop on a spring, gap 2 um, 155-160 Hz (NS)": CASES[
         "stop on a spring, gap 2 um, 155-160 Hz (NS)"] + ("neimark_sacker",),
@@ -72,7 +73,8 @@ SCAN = {
                                                    140.0, {"gap": 3e-6}, "mark",
                                                    "period_doubling"),
 }
-#: Where the SciPy references of tests/physics/test_branch_accuracy.py put those
+#: Where the SciPy references of tests/physics/test_branch_accuracy.py (and of
+#: test_neimark_sacker_accuracy.py) put those
 #: bifurcations [Hz]: the NS point's secant on its pair's modulus (MovingStopMap), the
 #: doubling's on det(I + M) (reference_period_doubling).
 REFERENCES = {"neimark_sacker": 158.0037239231, "period_doubling": 145.3200585540}
