@@ -205,8 +205,9 @@ def contact_step_bound(p: dict, bs: BeamSystem) -> tuple[float, str]:
     in a sub-step: the contact alone is RK4's.)"""
     mass, _, delta = _expected_impact(p, bs)
     kh = p["hertz_stiffness"]
-    rates = {"the contact's stiffness": math.sqrt(1.5 * kh * math.sqrt(delta) / mass),
-             "the contact's damping": kh * delta ** 1.5 * bs.contact_damping / mass}
+    rates = {"the contact's stiffness": math.sqrt(hertz.stiffness(kh, delta) / mass),
+             "the contact's damping": hertz.static_force(kh, delta) * bs.contact_damping
+             / mass}
     what = max(rates, key=rates.get)
     return RK4_STABILITY / rates[what], what
 
