@@ -29,7 +29,7 @@ from ..models import hertz
 from ..models.tip_mass import contact_force, contact_force_rate, in_contact, voltage_rate
 from . import booking, hermite
 from .layouts import LANE
-from .rk4 import GRADED, THETA_TOL, WHOLE, forcing
+from .rk4 import GRADED, GRADED_TO_SWITCH, THETA_TOL, WHOLE, forcing
 
 #: The coefficients of a point with a moving stop: the tip's (model.Coefficients) and
 #: k_s/m_s [1/s^2], c_s/m_s [1/s], m/m_s [-].
@@ -69,17 +69,17 @@ def coupled_rk4(x, v, V, xs, vs, dt, f0, fm, f1, k, on):
 
 
 @njit(**JIT)
-def coupled_pieces(y, start, length, fractions, reverse, s0, c0, n_steps, h, A, k, on):
+def coupled_pieces(y, start, length, fractions, s0, c0, n_steps, h, A, k, on):
     """RK4 over the fraction [start, start + length] of a step of h [s] (forcing phase
-    sin, cos = s0, c0 at its start) in sub-steps of ``fractions`` of ``length``, reversed
-    when ``reverse``. ``y`` is (x, v, V, x_s, v_s); returns the end state and int V^2 dt."""
+    sin, cos = s0, c0 at its start) in sub-steps of ``fractions`` of ``length``, in their
+    order. ``y`` is (x, v, V, x_s, v_s); returns the end state and int V^2 dt."""
     w = math.pi / n_steps  # forcing phase per half step
     x, v, V, xs, vs = y
     q, at = 0.0, start
     f0 = forcing(A, s0, c0, 2.0 * w * at)
     n = fractions.shape[0]
     for i in range(n):
-        dt = (fractions[n - 1 - i] if reverse else fractions[i]) * length
+        dt = fractions[i] * length
         f1 = forcing(A, s0, c0, 2.0 * w * (at + dt))
         x, v, V, xs, vs, dq = coupled_rk4(x, v, V, xs, vs, dt * h,
                                   f0, forcing(A, s0, c0, w * (2.0 * at + dt)), f1, k, on)
@@ -162,7 +162,7 @@ def step(L, j):
         if latch > 0.0 and x - xs <= g and v - vs > 0.0:  # predicted approach velocity
             ch = latch / (v - vs)
             k = _with_damping(k, ch)
-        yn, dq = coupled_pieces(y, 0.0, 1.0, WHOLE, False, s0, c0, n_steps, h, A, k, 1.0)
+        yn, dq = coupled_pieces(y, 0.0, 1.0, WHOLE, s0, c0, n_steps, h, A, k, 1.0)
         d0, d1 = x - xs - g, yn[0] - yn[3] - g
         if d0 <= 0.0 < d1:  # first touch, on the cubic Hermite interpolant
             ch = booking.impact(L, j, hermite.crossing_rate(d0, v - vs, d1, yn[1] - yn[4], h,
@@ -170,14 +170,14 @@ def step(L, j):
         on = 1.0
     else:
         if on == 1.0:
-            yn, dq = coupled_pieces(y, 0.0, 1.0, QUARTERS, False, s0, c0, n_steps, h, A, k, on)
+            yn, dq = coupled_pieces(y, 0.0, 1.0, QUARTERS, s0, c0, n_steps, h, A, k, on)
         else:  # apart, the tip's step is the lane loop's trial step; the stop's is its own
             yn, dq = _apart(L, j, y, k)
         if _touching(yn, k) != (on == 1.0):
             kind, theta = _switch(y, yn, s0, c0, n_steps, h, A, k, on)
             # up to the switch with the old contact state (graded towards a separation)...
             graded = on == 1.0 and kind == hertz.TOUCH
-            ye, q1 = coupled_pieces(y, 0.0, theta, GRADED if graded else WHOLE, True, s0, c0,
+            ye, q1 = coupled_pieces(y, 0.0, theta, GRADED_TO_SWITCH if graded else WHOLE, s0, c0,
                             n_steps, h, A, k, on)
             onset = on == 0.0 and kind == hertz.TOUCH
             if onset:
@@ -185,7 +185,7 @@ def step(L, j):
                 k = _with_damping(k, ch)
             on = 1.0 - on
             # ... and after it with the new one (graded from a touch)
-            yn, q2 = coupled_pieces(ye, theta, 1.0 - theta, GRADED if onset else WHOLE, False,
+            yn, q2 = coupled_pieces(ye, theta, 1.0 - theta, GRADED if onset else WHOLE,
                                     s0, c0, n_steps, h, A, k, on)
             dq = q1 + q2
     xn, vn, Vn, xsn, vsn = yn

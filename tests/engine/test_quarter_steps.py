@@ -50,7 +50,7 @@ def test_quarter_steps_match_the_scalar_sub_steps():
         r = packing.pack_parameters(p)
         n_steps = r[PARAM.steps]
         x, v, e, _ = rk4.pieces(
-            y[0], y[1], y[2], 0.0, 1.0, QUARTERS, False, math.sin(phase), math.cos(phase),
+            y[0], y[1], y[2], 0.0, 1.0, QUARTERS, math.sin(phase), math.cos(phase),
             n_steps, r[PARAM.period] / n_steps, r[PARAM.amplitude],
             Coefficients(r[PARAM.wn2], r[PARAM.cm], r[PARAM.thm], r[PARAM.khm], r[PARAM.gap],
                          r[PARAM.ch], r[PARAM.irc], r[PARAM.thc]))
