@@ -47,9 +47,32 @@ def _beam() -> None:
 
 
 PARTS = (_tip_mass, _beam)
+#: The test files that need no part but the beam's (or none), longest first: the worker
+#: that compiles the beam, the shorter part, runs them while the other still compiles the
+#: tip-mass model's (:class:`_Dealer`). A file misplaced here only waits.
+BEAM_FIRST = (
+    "tests/physics/test_beam.py", "tests/physics/test_beam_recontact.py",
+    "tests/interface/test_beam_interface.py", "tests/interface/test_structure.py",
+    "tests/physics/test_bimorph.py", "tests/interface/test_beam_estimate.py",
+    "tests/physics/test_beam_basins.py", "tests/physics/test_rod.py",
+)
+#: The other files that take longest, longest first, dealt out before the rest, so that
+#: no worker ends the run alone on one of them.
+LONGEST = (
+    "tests/physics/test_branch_accuracy.py", "tests/physics/test_neimark_sacker_accuracy.py",
+    "tests/physics/test_beam_continuation.py", "notebooks/04_design_maps.ipynb",
+    "tests/interface/test_faults.py", "notebooks/07_beam_vs_tip_mass.ipynb",
+    "tests/physics/test_extreme.py", "tests/interface/test_adversarial.py",
+    "tests/interface/test_plots.py", "notebooks/05_s_curve.ipynb",
+    "notebooks/03_bifurcations.ipynb", "tests/interface/test_cluster.py",
+    "tests/physics/test_orbits.py", "tests/interface/test_cli.py",
+)
 #: The part that holds each module's compiled functions, by the first prefix of PARTS'
-#: index that the module's name starts with.
-_OWNERS = (("harvester_sweep._engine.modal", 1), ("harvester_sweep", 0))
+#: index that the module's name starts with; None: none, compiled where first needed (the
+#: acceptance rules, a few small functions that both models' solvers call, so that a beam
+#: test that needs one does not wait for the whole tip-mass part).
+_OWNERS = (("harvester_sweep._engine.modal", 1), ("harvester_sweep.acceptance", None),
+           ("harvester_sweep", 0))
 
 _shared: list[Path] = []  # the folder of the run's markers, one file per part compiled
 _finished: set[int] = set()
@@ -125,3 +148,39 @@ def pytest_collection_finish(session):
         finally:
             (_shared[0] / str(k)).touch()
     _waiting_for_parts()
+
+
+def pytest_configure(config):
+    # (the files in the order of pytest_collection_modifyitems, not xdist's, by test count)
+    if hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+
+
+def pytest_collection_modifyitems(session, config, items):
+    # (every worker collects the same order: xdist requires it)
+    rank = {path: k for k, path in enumerate(BEAM_FIRST + LONGEST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class _Dealer(LoadFileScheduling):
+        """xdist's scheduling of whole files, each worker dealt first the files that need
+        what it compiles: worker 0, which compiles the tip-mass model's part, the first
+        file not in BEAM_FIRST (the longest), any other the first in BEAM_FIRST; each
+        the first file left when there is none of its kind. Only the order changes: a
+        file dealt to a worker before the part it needs is compiled waits for it."""
+
+        def _assign_work_unit(self, node):
+            tip_mass = node.workerinput["workerid"] == "gw0"
+            for scope in self.workqueue:
+                if (scope in BEAM_FIRST) != tip_mass:
+                    self.workqueue.move_to_end(scope, last=False)
+                    break
+            super()._assign_work_unit(node)
+
+    return _Dealer(config, log)

@@ -206,40 +206,6 @@ def test_newtons_monodromy_is_the_period_maps_derivative():
     assert apart[0] < 1e-4 and apart[1] < apart[0] / 3
 
 
-def test_one_mode_at_the_tip_is_the_tip_mass_model():
-    """The one-mode beam striking at its tip is the tip-mass model with the reduced
-    parameters (m_eq, k_eq, theta_eq, mu_1): the same linear system in x = phi_1(L) eta_1
-    to rounding, and the same orbit from the lane engine (another integrator: plain RK4
-    on x) within both runs' accuracy."""
-    p, sol = _solve(n_modes=1)
-    bs = system_of(p)
-    tip = float(bs.modes.tip[0])
-    eq = bm.reduction(bimorph(p))
-    lumped = beam_model.tip_mass_system(eq.mass, eq.stiffness, 2 * p["damping_ratio"]
-                                        * math.sqrt(eq.stiffness * eq.mass), eq.coupling,
-                                        eq.capacitance, p["resistance"], p["gap"],
-                                        eq.forcing_factor)
-    T = np.diag([tip, tip, 1.0])  # (x, v, V) = T (eta, eta', V)
-    Ti = np.linalg.inv(T)
-    np.testing.assert_allclose(T @ bs.system.matrix @ Ti, lumped.matrix, rtol=1e-12,
-                               atol=1e-12 * np.abs(lumped.matrix).max())
-    np.testing.assert_allclose(T @ bs.system.forcing, lumped.forcing, rtol=1e-12)
-    np.testing.assert_allclose(bs.system.surfaces @ Ti, lumped.surfaces, rtol=1e-12)
-    np.testing.assert_allclose(T @ bs.system.inputs[0], lumped.inputs[0], rtol=1e-12)
-    tip_mass = run_scene("paper", **bm.as_tip_mass_parameters(bimorph(p)))
-    v = sol.values
-    assert v["impacts_per_period"][0] == tip_mass.metrics["impacts_per_period"] == 1
-    for name in ("power", "v_peak", "x_max", "x_min", "approach_velocity"):
-        assert v[name][0] == pytest.approx(tip_mass.metrics[name], rel=2e-7), name
-    # the Floquet multipliers: the beam's from forward differences at its reported step
-    # (about 1e-6), the lane engine's from central ones
-    mu = v["floquet_multipliers_real"][0] + 1j * v["floquet_multipliers_imag"][0]
-    ref = (np.array(tip_mass.metrics["floquet_multipliers_real"])
-           + 1j * np.array(tip_mass.metrics["floquet_multipliers_imag"]))
-    assert np.abs(mu - ref).max() <= 2e-6
-    assert v["spectral_radius"][0] == abs(mu[0])
-
-
 def test_one_rod_mode_is_the_stop_on_a_spring():
     """A rod in one mode is the lumped stop on a spring (rod.equivalent: m_s, k_s): the
     same linear system in the stop's displacement x_s = psi_1(L_r) q_1, but for the base's
@@ -480,3 +446,39 @@ def test_a_mode_decayed_clear_of_the_stops_is_zero_not_subnormal():
         assert (z[0][np.abs(exact) < 1e-10 * modal_map.modal.kernel.TINY] == 0.0).all()
         passed |= np.abs(exact) < tiny
     assert passed.sum() >= 2  # (the test would have seen subnormals without TINY)
+
+
+def test_one_mode_at_the_tip_is_the_tip_mass_model():
+    """The one-mode beam striking at its tip is the tip-mass model with the reduced
+    parameters (m_eq, k_eq, theta_eq, mu_1): the same linear system in x = phi_1(L) eta_1
+    to rounding, and the same orbit from the lane engine (another integrator: plain RK4
+    on x) within both runs' accuracy. (Last in the file: the one test here that runs the
+    tip-mass model, whose engine a cold suite compiles while the beam's tests run:
+    conftest.BEAM_FIRST.)"""
+    p, sol = _solve(n_modes=1)
+    bs = system_of(p)
+    tip = float(bs.modes.tip[0])
+    eq = bm.reduction(bimorph(p))
+    lumped = beam_model.tip_mass_system(eq.mass, eq.stiffness, 2 * p["damping_ratio"]
+                                        * math.sqrt(eq.stiffness * eq.mass), eq.coupling,
+                                        eq.capacitance, p["resistance"], p["gap"],
+                                        eq.forcing_factor)
+    T = np.diag([tip, tip, 1.0])  # (x, v, V) = T (eta, eta', V)
+    Ti = np.linalg.inv(T)
+    np.testing.assert_allclose(T @ bs.system.matrix @ Ti, lumped.matrix, rtol=1e-12,
+                               atol=1e-12 * np.abs(lumped.matrix).max())
+    np.testing.assert_allclose(T @ bs.system.forcing, lumped.forcing, rtol=1e-12)
+    np.testing.assert_allclose(bs.system.surfaces @ Ti, lumped.surfaces, rtol=1e-12)
+    np.testing.assert_allclose(T @ bs.system.inputs[0], lumped.inputs[0], rtol=1e-12)
+    tip_mass = run_scene("paper", **bm.as_tip_mass_parameters(bimorph(p)))
+    v = sol.values
+    assert v["impacts_per_period"][0] == tip_mass.metrics["impacts_per_period"] == 1
+    for name in ("power", "v_peak", "x_max", "x_min", "approach_velocity"):
+        assert v[name][0] == pytest.approx(tip_mass.metrics[name], rel=2e-7), name
+    # the Floquet multipliers: the beam's from forward differences at its reported step
+    # (about 1e-6), the lane engine's from central ones
+    mu = v["floquet_multipliers_real"][0] + 1j * v["floquet_multipliers_imag"][0]
+    ref = (np.array(tip_mass.metrics["floquet_multipliers_real"])
+           + 1j * np.array(tip_mass.metrics["floquet_multipliers_imag"]))
+    assert np.abs(mu - ref).max() <= 2e-6
+    assert v["spectral_radius"][0] == abs(mu[0])
