@@ -9,11 +9,16 @@ tests. A part another worker is still compiling is waited for, not compiled agai
 worker that has done its share, numba's compiling of a function of such a part waits until
 the part is in the cache (and then loads it), and so does starting another process (a
 command-line test, a Dask worker, a notebook's kernel, which jupyter_client starts with
-subprocess.Popen), which would compile what it lacks. So the worker that finishes first
-runs the tests that need only its part while the other compiles. The cache is safe for
-processes that compile at once (harvester_sweep.jit), so a worker that gives up waiting
-only compiles again. Without xdist nothing is done here: the
-first test that needs an engine compiles it.
+subprocess.Popen), which would compile what it lacks. The cache is safe for processes
+that compile at once (harvester_sweep.jit), so a worker that gives up waiting only
+compiles again. Without xdist nothing is done here: the first test that needs an engine
+compiles it.
+
+The files are dealt out so that waiting is rare (_Dealer): the beam's part compiles
+sooner, and its worker runs the files that need nothing else (BEAM_FIRST) while worker 0
+still compiles the tip-mass model's; worker 0 starts on the longest of the others
+(LONGEST), and the files that take longest go before the rest, so that no worker ends
+the run alone on a long one.
 """
 
 from __future__ import annotations
@@ -47,14 +52,16 @@ def _beam() -> None:
 
 
 PARTS = (_tip_mass, _beam)
-#: The test files that need no part but the beam's (or none), longest first: the worker
-#: that compiles the beam, the shorter part, runs them while the other still compiles the
-#: tip-mass model's (:class:`_Dealer`). A file misplaced here only waits.
+#: The test files that need no part but the beam's (or none): the worker that compiles
+#: the beam, the shorter part, runs them while the other still compiles the tip-mass
+#: model's (:class:`_Dealer`). Last, those whose last tests compare with the tip-mass
+#: model, and wait for it. A file misplaced here only waits.
 BEAM_FIRST = (
-    "tests/physics/test_beam.py", "tests/physics/test_beam_recontact.py",
-    "tests/interface/test_beam_interface.py", "tests/interface/test_structure.py",
-    "tests/physics/test_bimorph.py", "tests/interface/test_beam_estimate.py",
-    "tests/physics/test_beam_basins.py", "tests/physics/test_rod.py",
+    "tests/physics/test_beam_recontact.py", "tests/interface/test_beam_interface.py",
+    "tests/interface/test_structure.py", "tests/physics/test_bimorph.py",
+    "tests/interface/test_beam_estimate.py", "tests/physics/test_beam_basins.py",
+    "tests/physics/test_rod.py", "tests/physics/test_beam.py",
+    "tests/physics/test_beam_accuracy.py",
 )
 #: The other files that take longest, longest first, dealt out before the rest, so that
 #: no worker ends the run alone on one of them.

@@ -36,24 +36,6 @@ def reduced():
                                                                      n_modes=1)))
 
 
-@pytest.mark.parametrize("i, j", POINTS)
-def test_the_beams_error_is_within_twice_its_estimate_and_the_accuracy(reduced, i, j):
-    gap, f = float(GAPS[i]), float(FREQUENCIES[j])
-    beam = beam_sweep({"gap": [gap], "frequency": [f]}, "bimorph_tip", n_modes=1,
-                      accuracy=ACCURACY)
-    ref = run_scene("paper", **reduced, gap=gap, frequency=f, accuracy=1e-11).metrics
-    assert int(beam["status"].values.ravel()[0]) == 0 and ref["status"] == "settled"
-    got = {name: float(beam[name].values.ravel()[0]) for name in OUTPUTS}
-    # the same orbit (both from the linear steady state)
-    assert abs(got["x_max"] - ref["x_max"]) < 1e-3 * abs(ref["x_max"])
-    estimate = float(beam["error_estimate"].values.ravel()[0])
-    assert estimate <= ACCURACY
-    for name in OUTPUTS:
-        error = abs(got[name] - ref[name]) / abs(ref[name])
-        assert error <= 2 * estimate + FLOOR, (name, error, estimate)
-        assert error <= ACCURACY, (name, error)
-
-
 @pytest.mark.parametrize("frequency", [150.0, 200.0])  # [Hz]: mak_rod striking once a period
 def test_the_rod_faces_error_is_within_twice_the_estimate_and_the_accuracy(frequency):
     """``stop_face_max`` is in the estimate: against the same orbit at 8 times the grid
@@ -72,3 +54,23 @@ def test_the_rod_faces_error_is_within_twice_the_estimate_and_the_accuracy(frequ
     error = abs(got["stop_face_max"] - ref["stop_face_max"]) / ref["stop_face_max"]
     assert error <= 2 * estimate + FLOOR, (error, estimate)
     assert error <= ACCURACY, error
+
+
+@pytest.mark.parametrize("i, j", POINTS)
+def test_the_beams_error_is_within_twice_its_estimate_and_the_accuracy(reduced, i, j):
+    # (after the rod's test: a cold suite compiles the tip-mass engine of the reference
+    # while the beam's tests run, conftest.BEAM_FIRST)
+    gap, f = float(GAPS[i]), float(FREQUENCIES[j])
+    beam = beam_sweep({"gap": [gap], "frequency": [f]}, "bimorph_tip", n_modes=1,
+                      accuracy=ACCURACY)
+    ref = run_scene("paper", **reduced, gap=gap, frequency=f, accuracy=1e-11).metrics
+    assert int(beam["status"].values.ravel()[0]) == 0 and ref["status"] == "settled"
+    got = {name: float(beam[name].values.ravel()[0]) for name in OUTPUTS}
+    # the same orbit (both from the linear steady state)
+    assert abs(got["x_max"] - ref["x_max"]) < 1e-3 * abs(ref["x_max"])
+    estimate = float(beam["error_estimate"].values.ravel()[0])
+    assert estimate <= ACCURACY
+    for name in OUTPUTS:
+        error = abs(got[name] - ref[name]) / abs(ref[name])
+        assert error <= 2 * estimate + FLOOR, (name, error, estimate)
+        assert error <= ACCURACY, (name, error)
