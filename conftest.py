@@ -73,6 +73,9 @@ LONGEST = (
     "tests/interface/test_plots.py", "notebooks/05_s_curve.ipynb",
     "notebooks/03_bifurcations.ipynb", "tests/interface/test_cluster.py",
     "tests/physics/test_orbits.py", "tests/interface/test_cli.py",
+    "notebooks/06_moving_stop.ipynb", "notebooks/01_paper_scene.ipynb",
+    "tests/physics/test_continuation.py", "notebooks/02_frequency_response.ipynb",
+    "tests/engine/test_cache.py", "tests/interface/test_beam_cluster.py",
 )
 #: The part that holds each module's compiled functions, by the first prefix of PARTS'
 #: index that the module's name starts with; None: none, compiled where first needed (the

@@ -201,3 +201,16 @@ def test_every_subpackage_is_installed():
                  ["packages"])
     folders = {_module_name(p) for p in PACKAGE.rglob("__init__.py")}
     assert folders == listed, folders ^ listed
+
+
+def test_the_suites_dealing_names_its_files_once():
+    """conftest.py deals the test files out by name (BEAM_FIRST, LONGEST): a file renamed
+    or removed would silently fall back to the end of the run."""
+    names = {}
+    for node in ast.parse((ROOT / "conftest.py").read_text()).body:
+        if isinstance(node, ast.Assign) and node.targets[0].id in ("BEAM_FIRST", "LONGEST"):
+            names[node.targets[0].id] = ast.literal_eval(node.value)
+    listed = names["BEAM_FIRST"] + names["LONGEST"]
+    assert len(listed) == len(set(listed))
+    for path in listed:
+        assert (ROOT / path).is_file(), path
