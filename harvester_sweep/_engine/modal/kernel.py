@@ -85,6 +85,9 @@ TINY = 1e-200
 SETTLED, NOT_SETTLED, DIVERGED = 0, 1, 2
 #: Kinds of switch that turn a surface's force on or off.
 TOUCH, CLIP = hertz.TOUCH, hertz.CLIP
+# (as numpy integers where a function is called with either and with a variable: typed as
+# int64, not each as a literal, a signature of its own, compiled again callees and all)
+_TOUCH, _CLIP = np.int64(TOUCH), np.int64(CLIP)
 _NH = len(HEAD)
 _IMPACTS, _APPROACH, _FORCE, _POWER = (HEAD.impacts, HEAD.approach_velocity,
                                        HEAD.contact_force, HEAD.power)
@@ -328,20 +331,20 @@ def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, p
                 return -1.0, TOUCH
             if db > 0.0 and cb > 0.0:
                 if da <= 0.0:
-                    return _locate(TOUCH, s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p,
+                    return _locate(_TOUCH, s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p,
                                    pab, gap, ch, zero, buf, D, S), TOUCH
-                tc = _locate(CLIP, s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p, pab, gap,
+                tc = _locate(_CLIP, s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p, pab, gap,
                              ch, zero, buf, D, S)
                 if _inside(s, z, t0, tc, omega, lam, pen, pl, pen_p, gap, buf, D):
                     return tc, CLIP
                 # out and back in between: the touch after the clip's crossing
-                return _locate(TOUCH, s, z, t0, tc, b, omega, lam, pen, pl, pl2, pen_p, pab,
+                return _locate(_TOUCH, s, z, t0, tc, b, omega, lam, pen, pl, pl2, pen_p, pab,
                                gap, ch, zero, buf, D, S), TOUCH
             if da <= 0.0 and db <= 0.0 and ra > 0.0 and rb < 0.0:
                 tm, dm = _peak(s, z, t0, a, b, omega, lam, pen, pl, pl2, pen_p, pab, gap,
                                zero, buf, D, S)
                 if dm > 0.0:
-                    return _locate(TOUCH, s, z, t0, a, tm, omega, lam, pen, pl, pl2, pen_p,
+                    return _locate(_TOUCH, s, z, t0, a, tm, omega, lam, pen, pl, pl2, pen_p,
                                    pab, gap, ch, zero, buf, D, S), TOUCH
             if da > 0.0 and ca <= 0.0 and db <= 0.0:
                 # off at the clip, out by the piece's end: the clip may come back above
@@ -349,7 +352,7 @@ def _hidden(s, z, t0, tau, limit, d0, r0, c0, d1, r1, c1, omega, lam, pen, pl, p
                 td, cd = _leave(s, z, t0, a, b, ca, omega, lam, pen, pl, pen_p, gap, ch, buf,
                                 D)
                 if cd > 0.0:
-                    tc = _locate(CLIP, s, z, t0, a, td, omega, lam, pen, pl, pl2, pen_p, pab,
+                    tc = _locate(_CLIP, s, z, t0, a, td, omega, lam, pen, pl, pl2, pen_p, pab,
                                  gap, ch, zero, buf, D, S)
                     if _inside(s, z, t0, tc, omega, lam, pen, pl, pen_p, gap, buf, D):
                         return tc, CLIP
@@ -534,10 +537,10 @@ def _step_tangents(z, w2, w3, w4, t, tau, e1, eh, tan, shifted, timing, omega, p
     stages' slopes taken once for both."""
     _stage_slopes(z, w2, w3, w4, t, tau, omega, pen, pl, pen_p, gap, kh, ch, slope, timing,
                   D, S)
-    _lawson_tangents(tan, tau, e1, eh, slope, 14, pen, pl, inp, work, df, D, S)
+    _lawson_tangents(tan, tau, e1, eh, slope, np.int64(14), pen, pl, inp, work, df, D, S)
     if timing:
-        _lawson_tangents(shifted, tau, e1, eh, slope, 8, pen, pl, inp, shift_work, shift_df,
-                         D, S)
+        _lawson_tangents(shifted, tau, e1, eh, slope, np.int64(8), pen, pl, inp, shift_work,
+                         shift_df, D, S)
 
 
 @njit(**JIT)
@@ -716,9 +719,11 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
         near = _until(d1, r1, a1) if d1 > 0.0 else math.inf
     status, p_found, run = SETTLED, 0, 0
     if book or nrec >= 0:  # the start is the first sample
-        nrec = _sample(z, 0.0, st[3] * T, book, acc, rec, nrec, prev, o_prev, do_prev, F, omega,
-                       pen, pl, pl2, pen_p, pab, gap, kh, ch, out, outl, out_p, out_f, volt, D, S,
-                       K)
+        # (book and nrec as typed values: one compile of _sample, not one for each of
+        # _advance's literals)
+        nrec = _sample(z, 0.0, st[3] * T, np.bool_(book), acc, rec, np.int64(nrec), prev,
+                       o_prev, do_prev, F, omega, pen, pl, pl2, pen_p, pab, gap, kh, ch, out,
+                       outl, out_p, out_f, volt, D, S, K)
     blown = False  # a contact sub-step's state not finite
     for period in range(periods):
         t, j, on_grid = 0.0, 0, True
@@ -774,7 +779,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         tm, dm = _peak(s, z, t, 0.0, tau, omega, lam, pen, pl, pl2, pen_p, pab,
                                        gap, zero, buf, D, S)
                         if dm > 0.0:
-                            found = _locate(TOUCH, s, z, t, 0.0, tm, omega, lam, pen, pl,
+                            found = _locate(_TOUCH, s, z, t, 0.0, tm, omega, lam, pen, pl,
                                             pl2, pen_p, pab, gap, ch, zero, buf, D, S)
                             if found > floor:
                                 mine = found
@@ -795,8 +800,8 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                     if tangents:  # (each tangent's move of the switch: _shift)
                         _carry(lam, tan, t - t_tan, D)
                         t_tan = t
-                        _moves(bs, bkind, z, t, lam, tan, moves, shifted, omega, pen, pl, pl2,
-                               pen_p, pab, gap, zero, D, S)
+                        _moves(np.int64(bs), np.int64(bkind), z, t, lam, tan, moves, shifted,
+                               omega, pen, pl, pl2, pen_p, pab, gap, zero, D, S)
                         timing = True
                     on_grid = False
                     mode, act, grade = 1, bs, 0 if bkind == TOUCH else GRADES
@@ -843,9 +848,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 if d1 > 0.0 and (c1 > 0.0 or (entered == CLIP and not stepped)):
                     if tangents:
                         ea, eb = (e1, eh) if cut_here else (sub1[grade], subh[grade])
-                        _step_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, shifted, timing,
-                                       omega, pen, pl, pen_p, inp, gap, kh, ch, slope, work,
-                                       df, shift_work, shift_df, D, S)
+                        _step_tangents(z, w2, w3, w4, t, tau, ea, eb, tan, shifted,
+                                       np.bool_(timing), omega, pen, pl, pen_p, inp, gap, kh,
+                                       ch, slope, work, df, shift_work, shift_df, D, S)
                         if timing and last:  # (the period's end, a fixed time, ends the shift)
                             _shift(lam, zn, shifted, tan, moves, inp, F, D, S)
                             timing = False
@@ -888,7 +893,7 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                         blown = True
                         break
                     if tangents:  # (along the last sub-step the secant steps computed)
-                        _step_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, shifted, timing,
+                        _step_tangents(z, w2, w3, w4, t, ts, e1, eh, tan, shifted, np.bool_(timing),
                                        omega, pen, pl, pen_p, inp, gap, kh, ch, slope, work,
                                        df, shift_work, shift_df, D, S)
                         if timing:  # (the force is off: the free flow takes over)
@@ -904,9 +909,9 @@ def _advance(z, st, periods, book, rec, nrec, omega, T, steps, substep, lam, gri
                 if last:
                     t = T
             if sample and (book or nrec >= 0):
-                nrec = _sample(z, t, (st[3] + period) * T + t, book, acc, rec, nrec, prev,
-                               o_prev, do_prev, F, omega, pen, pl, pl2, pen_p, pab, gap, kh,
-                               ch, out, outl, out_p, out_f, volt, D, S, K)
+                nrec = _sample(z, t, (st[3] + period) * T + t, np.bool_(book), acc, rec,
+                               np.int64(nrec), prev, o_prev, do_prev, F, omega, pen, pl, pl2,
+                               pen_p, pab, gap, kh, ch, out, outl, out_p, out_f, volt, D, S, K)
             if t >= T:
                 break
         # ---- the period's end: its strobe (the next period's samples start from it)
