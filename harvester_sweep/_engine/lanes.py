@@ -566,8 +566,9 @@ def quarter_steps(L, lanes):
     instructions in any lane of a block, and cost a block, not a lane each, when several
     lanes take them together (the copies of a point in an ensemble, neighbouring gaps in a
     sweep). One block, at a constant offset, run as often as needed: LLVM vectorizes the
-    loop of a block whose offset it knows, and one copy of the block's code compiles in a
-    quarter of the time that four written out did.
+    loop of a block whose offset it knows, and one copy of the block's code is a quarter
+    of the compile of four written out, which was a large share of the engine's
+    (benchmarks/results/compile_time.md).
     """
     j = 0
     while j < lanes:
