@@ -70,8 +70,9 @@ def _run_queue(params, states, metrics, strobes, series, settle, queue, successo
     carriers = np.empty(LANES, dtype=np.int64)
     n_carriers, relist = 0, True
     for j in range(n_lanes):  # the lanes that get no point are the last ones
-        pt = _next_point(params, states, metrics, strobes, successors, queue, -1, False,
-                         control, b)
+        # (none done yet, as typed values: the same compile of _next_point as the call below)
+        pt = _next_point(params, states, metrics, strobes, successors, queue, np.int64(-1),
+                         np.bool_(False), control, b)
         if pt < 0:
             break
         lanes.take(L, j, params, states, pt, ring, acc, gaps, 0.0)
