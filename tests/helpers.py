@@ -165,6 +165,21 @@ def reference_orbit(result, periods_to_settle=40, method="DOP853", rtol=1e-12):
 FAST = {"steps_per_period": 256, "max_periods": 2000}
 
 
+def secant(function, a, b, y, iterations=6):
+    """The root of ``function(value, y) -> (residual, y, extra)`` by the secant method from
+    ``a`` and ``b`` (both first evaluated from ``y``), each call's ``y`` (an orbit's state:
+    a Newton guess) handed to the next; stops at 1e-10 of the value. Returns the last value
+    and its ``extra`` (a reference's monodromy there)."""
+    (fa, _, _), (fb, y, extra) = function(a, y), function(b, y)
+    for _ in range(iterations):
+        c = b - fb * (b - a) / (fb - fa)
+        (fc, y, extra), a, fa = function(c, y), b, fb
+        b, fb = c, fc
+        if abs(b - a) < 1e-10 * abs(b):
+            break
+    return b, extra
+
+
 def spec(grid, parameters=None, **options):
     """A sweep of the paper scene over ``grid`` at a fixed, fast step."""
     return {"preset": "paper", "parameters": {**FAST, **(parameters or {})}, "grid": grid,

@@ -586,7 +586,7 @@ def quarter_steps(L, lanes):
         for k in range(n, BLOCK):
             for r in range(LANE.q_lane, LANE.q_thc + LANES, LANES):
                 L[r + k] = L[r]
-        _quarter_block(L, 0)
+        _quarter_block(L)
         for k in range(n):
             i = int(L[LANE.q_lane + k])
             L[LANE.x_trial + i], L[LANE.v_trial + i], L[LANE.voltage_trial + i] = (
@@ -630,11 +630,11 @@ def _quarter_tangents(L, j, x, v, V, s0, c0):
 
 
 @njit(inline="always", **JIT)
-def _quarter_block(L, b):
-    """Four quarter steps of the packed lanes b, ..., b + BLOCK - 1 (see quarter_steps),
+def _quarter_block(L):
+    """Four quarter steps of the packed lanes 0, ..., BLOCK - 1 (see quarter_steps),
     with the forcing every eighth of a step by rotating the phase; written out, as LLVM
     vectorizes only a loop without an inner loop."""
-    for k in range(b, b + BLOCK):
+    for k in range(BLOCK):
         x, v, V, s0, c0 = (
             L[LANE.q_x + k],
             L[LANE.q_v + k],

@@ -40,7 +40,7 @@ from scipy.integrate import solve_ivp
 import tests.helpers as helpers
 from harvester_sweep import continue_branch, resolve_parameters
 from harvester_sweep.outputs import BIFURCATIONS
-from tests.helpers import Reference, period_map_jacobian
+from tests.helpers import Reference, period_map_jacobian, secant
 
 FOLD = list(BIFURCATIONS).index("fold")
 PERIOD_DOUBLING = list(BIFURCATIONS).index("period_doubling")
@@ -194,16 +194,7 @@ def reference_period_doubling(case, ds, i, width):
         y, jacobian = reference_orbit(_parameters(case, value), y, periods)
         return np.linalg.det(np.eye(3) + jacobian), y, jacobian
 
-    a, b = float(point[name]) - width, float(point[name]) + width
-    fa, _, _ = det(a, y)
-    fb, y, jacobian = det(b, y)
-    for _ in range(6):
-        c = b - fb * (b - a) / (fb - fa)
-        (fc, y, jacobian), a, fa = det(c, y), b, fb
-        b, fb = c, fc
-        if abs(b - a) < 1e-10 * abs(b):
-            break
-    return b, jacobian
+    return secant(det, float(point[name]) - width, float(point[name]) + width, y)
 
 
 @pytest.mark.parametrize("case", [GAP_BRANCH, PD_BRANCH,

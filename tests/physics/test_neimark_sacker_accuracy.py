@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 from harvester_sweep import resolve_parameters
 from harvester_sweep.continuation import _continue, check_continuation
 from harvester_sweep.datasets import branch_dataset
-from tests.helpers import lankarani_nikravesh_damping
+from tests.helpers import lankarani_nikravesh_damping, secant
 from tests.physics.test_branch_accuracy import (
     NEIMARK_SACKER,
     REFERENCE_MAX_STEP,
@@ -145,14 +145,7 @@ def test_neimark_sacker_is_within_twice_its_shift():
         return np.abs(mu[np.abs(mu.imag) > 1e-9]).max() ** 2 - 1, y, jacobian
 
     _, y, at_value = modulus(value, state)  # (the reference's at the engine's location)
-    a, b = value - 1e-4, value + 1e-4
-    (fa, y, _), (fb, y, _) = modulus(a, y), modulus(b, y)
-    for _ in range(6):
-        c = b - fb * (b - a) / (fb - fa)
-        (fc, y, _), a, fa = modulus(c, y), b, fb
-        b, fb = c, fc
-        if abs(b - a) < 1e-10 * abs(b):
-            break
+    b, _ = secant(modulus, value - 1e-4, value + 1e-4, y)
     off = abs(value - b)
     assert off <= 2 * shift + 0.5 * width, (value, b, off, shift, width)
     engine = (point["floquet_multipliers_real"].values
