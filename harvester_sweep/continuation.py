@@ -270,7 +270,14 @@ class _Problem:
         self.tolerance = base["settle_tolerance"]
         self._rows = {}
 
-    def row(self, lam: float, steps: int) -> np.ndarray:
+    def row(self, lam: float, steps: int, coarse=None) -> np.ndarray:
+        """The packed row at parameter value ``lam`` and ``steps`` steps per period; with
+        ``coarse``, for the run that estimates the error of one at ``coarse`` steps
+        (period_map.estimating_row)."""
+        if coarse is not None:
+            row = self.row(lam, coarse).copy()
+            period_map.estimating_row(row, float(coarse), float(steps))
+            return row
         key = (float(lam), steps)
         if len(self._rows) > ROW_CACHE:  # (a long branch visits ever new values)
             self._rows.clear()
@@ -291,15 +298,17 @@ class _Problem:
         other.steps = int(steps)
         return other
 
-    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True):
+    def evaluate(self, z, period: int, carry: np.ndarray, steps: int, jacobian=True,
+                 coarse=None):
         """P^p at z and, with ``jacobian``, the scaled [M - I, dP/dlam]: the end state (4,),
         the metric row, the monodromy (3, 3) and the scaled Jacobian (3, 4); None where the
-        run diverged or the value is outside the parameter's range."""
+        run diverged or the value is outside the parameter's range. ``coarse``: the map
+        estimates the error of one at ``coarse`` steps per period (:meth:`row`)."""
         lam = self.lam(z)
         dlam = PERTURBATION * self.range
         try:
-            row = self.row(lam, steps)
-            shifted = self.row(lam + dlam, steps) if jacobian else None
+            row = self.row(lam, steps, coarse)
+            shifted = self.row(lam + dlam, steps, coarse) if jacobian else None
         except ParameterError:
             return None
         state = carry.copy()
@@ -333,15 +342,18 @@ class _Problem:
         batch.add(self.row(self.lam(z), self.steps), state[None, :], period)
         return batch.run()[0].strobes[0]
 
-    def correct(self, predicted, tangent, period: int, carry, steps=None, fixed=None):
+    def correct(self, predicted, tangent, period: int, carry, steps=None, fixed=None,
+                coarse=None):
         """Newton on [F(z); tangent . (z - predicted)] = 0 from ``predicted``; a _Point
         (its tangent not yet set), or None when it does not converge. ``fixed``: a scaled
-        Jacobian to reuse for every iterate (quasi-Newton, one lane a run)."""
+        Jacobian to reuse for every iterate (quasi-Newton, one lane a run); ``coarse``: as
+        :meth:`evaluate`'s."""
         steps = self.steps if steps is None else steps
         z = predicted.copy()
         last = math.inf
         for _ in range(MAX_CORRECTOR):
-            out = self.evaluate(z, period, carry, steps, jacobian=fixed is None)
+            out = self.evaluate(z, period, carry, steps, jacobian=fixed is None,
+                                coarse=coarse)
             if out is None:
                 return None
             end, metrics, monodromy, scaled = out
@@ -888,11 +900,12 @@ def _estimate(problem: _Problem, point: _Point) -> None:
     may not exist there), normal to the branch; normal to the branch also for the change
     of the parameter (at a fold, the fold's shift)."""
     normal = problem.correct(point.z, point.tangent, point.period, point.state,
-                             steps=2 * point.steps, fixed=point.jacobian)
+                             steps=2 * point.steps, fixed=point.jacobian, coarse=point.steps)
     if normal is not None:
         point.shift = problem.lam(normal.z) - problem.lam(point.z)
     fine = problem.correct(point.z, np.eye(problem.D + 1)[problem.D], point.period,
-                           point.state, steps=2 * point.steps, fixed=point.jacobian)
+                           point.state, steps=2 * point.steps, fixed=point.jacobian,
+                           coarse=point.steps)
     fine = normal if fine is None else fine
     if fine is not None:
         point.error = float(halving_error(point.metrics, fine.metrics))

@@ -93,6 +93,7 @@ from .period_map import (
     ROUNDING,
     carries_tangents,
     copies_monodromy,
+    estimating_row,
     free_monodromy_into,
     perturb,
     run_lanes,
@@ -631,11 +632,12 @@ def _round(T, threads):
             left = T.reals[i, _REAL.left]
             periods = left if left < SLICE + MAX_ORBIT_PERIOD else SLICE
             start = T.states[i, _STATES.traj]
-        elif T.counts[i, _COUNT.phase] == _ESTIMATE:
-            steps = 2 * steps
+        estimate = T.counts[i, _COUNT.phase] == _ESTIMATE
         for w in range(width):
             params[k + w] = T.rows[i]
             params[k + w, PARAM.steps] = steps
+            if estimate:
+                estimating_row(params[k + w], steps, 2 * steps)
             params[k + w, PARAM.max_periods] = periods
             states[k + w] = start
             if w > 0:  # (the copies book no extrema: their end states alone are read)

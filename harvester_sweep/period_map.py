@@ -219,6 +219,22 @@ def run_lanes(params, states, metrics, strobes, most, derivatives):
 
 
 @njit(**SOLVER_JIT)
+def estimating_row(row, coarse, steps):
+    """Set packed row ``row`` to ``steps`` steps per period for the run that estimates the
+    error of a run of it at ``coarse`` (fewer): with multi-steps (the engine's, clear of
+    the stops) of no more steps than at ``coarse``.
+
+    A run places the turns of x and V clear of the stops on the cubic interpolant over a
+    multi-step, whose error goes as the fourth power of its length. At twice the steps
+    the engine would take multi-steps of twice the steps, as long as before: that error
+    would be alike in both runs, and their change, the error estimate, would not hold it.
+    With the coarse run's multi-steps it falls with the step as RK4's does."""
+    row[PARAM.steps] = coarse
+    row[PARAM.multi] = _engine.multi_steps(row)
+    row[PARAM.steps] = steps
+
+
+@njit(**SOLVER_JIT)
 def carries_tangents(row):
     """Whether a run of packed row ``row`` can carry its monodromy along (PARAM.tangents):
     switches located, rigid stops, a fixed approach velocity."""

@@ -56,6 +56,7 @@ from .layouts import (
     STATE,
     STATUS,
 )
+from .lanes import multi_steps
 from .monodromy import free_extent, free_monodromy
 from .scheduler import record_series, run_independent, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
@@ -88,6 +89,7 @@ __all__ = [
     "carries_tangents",
     "free_extent",
     "free_monodromy",
+    "multi_steps",
     "record_series",
     "run_independent",
     "run_points",

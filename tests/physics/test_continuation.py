@@ -47,6 +47,19 @@ def system_matrix(p):
                      [0.0, -theta / cp, -1 / (r * cp)]])
 
 
+def test_a_branchs_error_estimates_hold_the_error_of_extrema_placed_on_multi_steps():
+    """A branch clear of the stop at 704 steps a period, above resonance: each point's
+    estimate comes from its correction at twice the steps with its own multi-steps
+    (period_map.estimating_row), and holds the error of x_max and v_peak against the
+    closed form (with the finer run's own multi-steps, which span as much of the period,
+    the error was several times the estimate)."""
+    ds = continue_branch("paper", "frequency", 200.0, 250.0, gap=1.0, steps_per_period=704)
+    p = resolve_parameters("paper", gap=1.0)
+    X, V = np.abs(np.array([phasor(**{**p, "frequency": f}) for f in ds["frequency"].values])).T
+    error = np.maximum(np.abs(ds["x_max"].values / X - 1), np.abs(ds["v_peak"].values / V - 1))
+    assert np.all(error <= 2 * ds["error_estimate"].values), error / ds["error_estimate"].values
+
+
 def test_linear_branch_matches_closed_form():
     """No stop (hertz_stiffness 0): no fold across the resonance, no grazing where the
     motion passes the gap, |X| and exp(A T) at every point."""
