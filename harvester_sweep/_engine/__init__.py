@@ -43,6 +43,7 @@ from . import (
     stop_motion,
     tangents,
 )
+from .lanes import multi_steps
 from .layouts import (
     BOOKED_METRICS,
     LANE,
@@ -56,7 +57,6 @@ from .layouts import (
     STATE,
     STATUS,
 )
-from .lanes import multi_steps
 from .monodromy import free_extent, free_monodromy
 from .scheduler import record_series, run_independent, run_points, warm_up
 from .steady import MAX_ORBIT_PERIOD
