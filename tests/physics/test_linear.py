@@ -68,7 +68,7 @@ def test_the_error_estimate_holds_the_error_of_extrema_placed_on_multi_steps(ste
     the error takes the coarse run's multi-steps, so that the change it measures holds
     that error: against the closed form, above resonance where it is the larger part, the
     error of x_max, x_min and v_peak is about 16/15 of the estimate (with the finer run's
-    own multi-steps it was two to five times the estimate)."""
+    own multi-steps it was several times the estimate)."""
     result = run_scene("paper", gap=1.0, frequency=250.0, steps_per_period=steps,
                        settle_tolerance=1e-13)
     X, V = phasor(**result.parameters)
