@@ -15,7 +15,7 @@ unchanged, the metrics within their error estimates. This reports
 - for power, v_peak, x_max and impacts_per_period (METRICS), where the sweep has them,
   among the points settled in both: the largest relative change, and how many changed by
   more than their error estimate (the larger of the two), and by more than both results
-  can err within their estimates (ERRORS_PER_ESTIMATE of each, summed: errors of opposite
+  can err within their estimates (ERROR_PER_ESTIMATE of each, summed: errors of opposite
   signs at two steps per period), where the sweep has one;
 - the RK4 steps and the periods of motion run, by status, before and after.
 """
@@ -29,12 +29,10 @@ import xarray as xr
 
 from benchmarks.variants import provenance, report
 from harvester_sweep._engine import STATUS
+from harvester_sweep.accuracy import ERROR_PER_ESTIMATE
 
 #: Metrics compared point by point, where the sweep has them.
 METRICS = ("power", "v_peak", "x_max", "impacts_per_period")
-#: A coarse orbit's error over its step-halving estimate, by RK4's fourth order [-]: two
-#: results each within theirs differ by at most this times the sum of the two estimates.
-ERRORS_PER_ESTIMATE = 16 / 15
 
 
 def compare(before: xr.Dataset, after: xr.Dataset) -> list[str]:
@@ -63,7 +61,7 @@ def compare(before: xr.Dataset, after: xr.Dataset) -> list[str]:
     if "error_estimate" in before and "error_estimate" in after:
         e_b, e_a = before.error_estimate.values.ravel(), after.error_estimate.values.ravel()
         estimate = np.fmax(e_b, e_a)[both]
-        total = ERRORS_PER_ESTIMATE * (e_b + e_a)[both]
+        total = ERROR_PER_ESTIMATE * (e_b + e_a)[both]
     lines += ["| metric (settled in both) | largest relative change | changed by more than "
               "the error estimate | than both can err |", "| --- | ---: | ---: | ---: |"]
     for name in METRICS:
