@@ -7,7 +7,9 @@ from benchmarks.estimate_honesty import lines_of, measure
 
 
 def test_a_point_clear_of_the_stop_and_one_with_impacts_are_tabled_apart():
-    points = [dict(gap=1.0, frequency=250.0), dict(gap=1e-6, frequency=140.0)]
+    # (at 235 Hz the swing stays 2 um clear of the stop: the automatic step, 704 a period,
+    # is the contact's, and its runs take multi-steps)
+    points = [dict(gap=2e-6, frequency=235.0), dict(gap=1e-6, frequency=140.0)]
     rows, worst = lines_of("two", measure("paper", points))
     assert [row.split("|")[2].strip() for row in rows] == ["clear of the stops",
                                                           "with impacts"]
