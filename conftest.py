@@ -3,16 +3,21 @@ the workers fill numba's on-disk cache between them, and no two compile the same
 
 On a cold cache most of a suite's time is numba compiling two machine codes that share
 little: the tip-mass model's lane engine with the orbit solver, and the beam's modal
-engine, each minutes on one core. Each worker compiles its share of them (worker k the
-parts k, k + workers, ...) once the tests are collected and dealt out, and then runs its
-tests. A part another worker is still compiling is waited for, not compiled again: in a
-worker that has done its share, numba's compiling of a function of such a part waits until
-the part is in the cache (and then loads it), and so does starting another process (a
+engine, each minutes on one core. Each worker compiles its share of them (PARTS, dealt
+by WORKER) once the tests are collected and dealt out, and then runs its tests. A part
+another worker is still compiling is waited for, not compiled again: in a worker that has
+done its share, numba's compiling of a function of such a part waits until the part is in
+the cache (and then loads it), and so does starting another process (a
 command-line test, a Dask worker, a notebook's kernel, which jupyter_client starts with
 subprocess.Popen), which would compile what it lacks. The cache is safe for processes
 that compile at once (harvester_sweep.jit), so a worker that gives up waiting only
 compiles again. Without xdist nothing is done here: the first test that needs an engine
 compiles it.
+
+The tip-mass model's part is the longer: the lane engine, then the orbit solver, which
+calls it. So the beam's worker first compiles the solver's set-up and per-point decisions,
+which need no engine (orbits.compile_decisions), and worker 0, compiling the solver after
+the engine, waits for them (FUNCTIONS) and loads them, even while it compiles its own part.
 
 The files are dealt out so that waiting is rare (_Dealer): the beam's part compiles
 sooner, and its worker runs the files that need nothing else (BEAM_FIRST) while worker 0
@@ -51,7 +56,20 @@ def _beam() -> None:
     beam_scene("bimorph_tip", periods=1, n_modes=1, gap=1e-6, frequency=230.0)
 
 
-PARTS = (_tip_mass, _beam)
+def _decisions() -> None:
+    """The orbit solver's set-up and per-point decisions, apart from the engine."""
+    from harvester_sweep.orbits import compile_decisions
+
+    compile_decisions()
+
+
+PARTS = (_tip_mass, _decisions, _beam)
+#: The worker (modulo the worker count) that compiles each part, in the order of PARTS.
+WORKER = (0, 1, 1)
+#: Functions whose part is not their module's: those compile_decisions compiles. A worker
+#: compiling its own part waits for these alone (they are the first part's callees).
+FUNCTIONS = {f"harvester_sweep.orbits.{name}": 1
+             for name in ("_set_up", "_start", "_newton", "_transient", "_estimate")}
 #: The test files that need no part but the beam's (or none): the worker that compiles
 #: the beam, the shorter part, runs them while the other still compiles the tip-mass
 #: model's (:class:`_Dealer`). Last, those whose last tests compare with the tip-mass
@@ -81,7 +99,7 @@ LONGEST = (
 #: index that the module's name starts with; None: none, compiled where first needed (the
 #: acceptance rules, a few small functions that both models' solvers call, so that a beam
 #: test that needs one does not wait for the whole tip-mass part).
-_OWNERS = (("harvester_sweep._engine.modal", 1), ("harvester_sweep.acceptance", None),
+_OWNERS = (("harvester_sweep._engine.modal", 2), ("harvester_sweep.acceptance", None),
            ("harvester_sweep", 0))
 
 _shared: list[Path] = []  # the folder of the run's markers, one file per part compiled
@@ -101,30 +119,50 @@ def _wait(parts) -> None:
         time.sleep(1.0)
 
 
-def _part_of(module: str):
+def _name(function) -> str:
+    return f"{getattr(function, '__module__', '')}.{getattr(function, '__qualname__', '')}"
+
+
+def _part_of(function):
+    """The part that holds ``function``'s compiled code, or None."""
+    if _name(function) in FUNCTIONS:
+        return FUNCTIONS[_name(function)]
+    module = getattr(function, "__module__", "") or ""
     for prefix, k in _OWNERS:
         if module == prefix or module.startswith(prefix + "."):
             return k
     return None
 
 
-def _waiting_for_parts() -> None:
-    """From now on in this worker: numba compiling a function of a part not yet compiled,
-    and starting a process, first wait for the parts (see the module's docstring)."""
+_compiling_own = [True]  # (while this worker compiles its parts: wait for FUNCTIONS alone)
+_mine: list[int] = []  # the parts this worker compiles
+
+
+def _waiting_for_functions() -> None:
+    """From now on in this worker: numba compiling a function of a part not yet compiled
+    first waits for the part: only for FUNCTIONS' while the worker compiles its own parts
+    (the others are its parts' callees, or compiled where they are first needed)."""
     from numba.core import sigutils
     from numba.core.dispatcher import Dispatcher
 
     compile_ = Dispatcher.compile
 
     def compile(self, sig):
-        k = _part_of(getattr(self.py_func, "__module__", "") or "")
-        if k is not None and not _done(k):
+        k = _part_of(self.py_func)
+        waits = k is not None and k not in _mine and not _done(k)
+        if waits and (not _compiling_own[0] or _name(self.py_func) in FUNCTIONS):
             args, _ = sigutils.normalize_signature(sig)
             if self.overloads.get(tuple(args)) is None:
                 _wait([k])
         return compile_(self, sig)
 
     Dispatcher.compile = compile
+
+
+def _waiting_for_parts() -> None:
+    """From now on in this worker: numba compiling a function of a part not yet compiled,
+    and starting a process, first wait for the parts (see the module's docstring)."""
+    _compiling_own[0] = False
     popen_init, start = subprocess.Popen.__init__, multiprocessing.process.BaseProcess.start
 
     def init(self, *args, **kwargs):
@@ -150,14 +188,30 @@ def pytest_collection_finish(session):
     _shared.append(Path(tempfile.gettempdir())
                    / f"harvester-sweep-compiled-{worker['testrunuid']}")
     _shared[0].mkdir(exist_ok=True)
-    for k in range(index, len(PARTS), count):
+    _mine.extend(k for k in range(len(PARTS)) if WORKER[k] % count == index)
+    _waiting_for_functions()
+    for k in _mine:
         try:
             PARTS[k]()
         except Exception as error:  # (it fails again, and is reported, in the tests that need it)
             warnings.warn(f"compiling {PARTS[k].__name__} before the tests failed: {error!r}")
         finally:
             (_shared[0] / str(k)).touch()
+    _compiled_again()
     _waiting_for_parts()
+
+
+def _compiled_again() -> None:
+    """Warn where this worker's parts compiled a function of FUNCTIONS that another worker
+    compiled for them: compile_decisions then gives it other types than the solver does."""
+    import importlib
+
+    for name, k in FUNCTIONS.items():
+        module, function = name.rsplit(".", 1)
+        if k not in _mine and sum(getattr(importlib.import_module(module), function)
+                                  .stats.cache_misses.values()):
+            warnings.warn(f"{name} was compiled again: compile_decisions does not give it "
+                          "the types the solver calls it with")
 
 
 def pytest_configure(config):

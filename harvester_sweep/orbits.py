@@ -1258,6 +1258,25 @@ def compile_solver() -> None:
     _rounds(pts, team, 0)  # (and the _round it calls)
 
 
+def compile_decisions() -> None:
+    """Compile the solver's set-up and its phases' decisions (``_set_up``, ``_newton``,
+    ``_transient``, ``_estimate``), or load them from numba's on-disk cache, without the
+    engine: the types are those ``_round`` calls them with, so that a compile of the
+    solver that finds them cached compiles only ``_round`` and ``_rounds`` about the
+    engine. A second process can compile them while the first compiles the engine (the
+    test suite's workers do: conftest.py)."""
+    pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
+                  np.zeros(0, bool), np.zeros(0), np.zeros(0), SETTLING)
+    _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
+    # (as _round passes them: a row of its metrics, states and strobes, its jac, ok a bool)
+    metrics, states = np.empty((1, len(METRIC))), np.empty((1, len(STATE)))
+    strobes, jac = np.empty((1, SAMPLES, N_RIGID)), np.empty((N_RIGID, N_RIGID))
+    run = tuple(numba.typeof(a) for a in (pts, np.int64(0), metrics[0], states[0], strobes[0]))
+    _newton.compile(run + (numba.typeof(jac), numba.types.boolean))
+    _transient.compile(run)
+    _estimate.compile(run[:4] + (numba.types.boolean,))
+
+
 def solver_ready() -> bool:
     """Whether the solver and the engine are in numba's on-disk cache (else the first solve
     compiles them)."""
