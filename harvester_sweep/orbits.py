@@ -1246,27 +1246,31 @@ SOURCE_DIGEST = cache.source_digest(cache.ENGINE_SOURCES + tuple(
 cache.flush_if_changed(_round, _COMPILED, SOURCE_DIGEST)
 
 
+def _no_points() -> _Points:
+    """A table of no points, of the types every solve's table has."""
+    return _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))),
+                   np.zeros(0, np.int64), np.zeros(0, bool), np.zeros(0), np.zeros(0),
+                   SETTLING)
+
+
 def compile_solver() -> None:
     """Compile the solver and the engine, or load them from numba's on-disk cache, without
     running a point (the table's types are the same for any size of the state)."""
     period_map.compile_engine()
-    pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
-                  np.zeros(0, bool), np.zeros(0), np.zeros(0), SETTLING)
-    _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
+    compile_decisions()
     team = np.zeros((1, len(_TEAM)), dtype=np.int64)
     team[0, _TEAM.threads] = 1
-    _rounds(pts, team, 0)  # (and the _round it calls)
+    _rounds(_no_points(), team, 0)  # (and the _round it calls)
 
 
 def compile_decisions() -> None:
     """Compile the solver's set-up and its phases' decisions (``_set_up``, ``_newton``,
     ``_transient``, ``_estimate``), or load them from numba's on-disk cache, without the
-    engine: the types are those ``_round`` calls them with, so that a compile of the
-    solver that finds them cached compiles only ``_round`` and ``_rounds`` about the
-    engine. A second process can compile them while the first compiles the engine (the
+    engine: for the types ``_round`` calls them with, so that a compile of the solver that
+    finds them cached has only ``_rounds`` and ``_round``, with the engine's calls, left to
+    compile. A second process can compile them while the first compiles the engine (the
     test suite's workers do: conftest.py)."""
-    pts = _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))), np.zeros(0, np.int64),
-                  np.zeros(0, bool), np.zeros(0), np.zeros(0), SETTLING)
+    pts = _no_points()
     _set_up(pts, np.zeros(0), True, np.zeros((0, 2)), np.zeros(0, np.int64))
     # (as _round passes them: a row of its metrics, states and strobes, its jac, ok a bool)
     metrics, states = np.empty((1, len(METRIC))), np.empty((1, len(STATE)))
@@ -1283,5 +1287,5 @@ def solver_ready() -> bool:
     return period_map.engine_ready() and cache.is_warm(_round)
 
 
-__all__ = ["SOURCE_DIGEST", "Orbits", "WORK", "compile_solver", "solve_orbits",
+__all__ = ["SOURCE_DIGEST", "Orbits", "WORK", "compile_decisions", "compile_solver", "solve_orbits",
            "solver_ready"]
