@@ -222,6 +222,10 @@ def pytest_configure(config):
 
 def pytest_collection_modifyitems(session, config, items):
     # (every worker collects the same order: xdist requires it)
+    # (a file renamed or removed would silently lose its place in the order)
+    gone = [path for path in BEAM_FIRST + LONGEST if not (config.rootpath / path).exists()]
+    if gone:
+        raise pytest.UsageError(f"conftest.py orders test files that do not exist: {gone}")
     rank = {path: k for k, path in enumerate(BEAM_FIRST + LONGEST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
 
