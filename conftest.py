@@ -43,9 +43,12 @@ WAIT = 1800.0
 
 def _tip_mass() -> None:
     """The lane engine and the orbit solver (a scene's solve compiles both, as a sweep's
-    does), and the record of the scene's orbit."""
-    from harvester_sweep import run_scene
+    does), and the record of the scene's orbit. The engine first: with it compiled, the
+    solver's compile starts no process for its decisions (orbits.compile_solver), which
+    the other worker compiles (_decisions)."""
+    from harvester_sweep import period_map, run_scene
 
+    period_map.compile_engine()
     run_scene(steps_per_period=256, max_periods=40).series(periods=1)
 
 

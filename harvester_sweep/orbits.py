@@ -60,10 +60,13 @@ count or the chunking.
 
 from __future__ import annotations
 
+import os
+import subprocess
 import sys
 import threading
 from collections import namedtuple
 from dataclasses import dataclass
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -1246,6 +1249,12 @@ SOURCE_DIGEST = cache.source_digest(cache.ENGINE_SOURCES + tuple(
 cache.flush_if_changed(_round, _COMPILED, SOURCE_DIGEST)
 
 
+#: The longest a first compile waits for the process that compiles the solver's decisions
+#: beside it (_decisions_beside) once its own engine is compiled [s]: they take about a
+#: minute on one core.
+HELPER_WAIT = 600.0
+
+
 def _no_points() -> _Points:
     """A table of no points, of the types every solve's table has."""
     return _points(np.zeros((0, len(PARAM))), np.zeros((0, len(STATE))),
@@ -1255,12 +1264,48 @@ def _no_points() -> _Points:
 
 def compile_solver() -> None:
     """Compile the solver and the engine, or load them from numba's on-disk cache, without
-    running a point (the table's types are the same for any size of the state)."""
-    period_map.compile_engine()
+    running a point (the table's types are the same for any size of the state). A first
+    compile of both, with two cores or more, has a second process compile the solver's
+    decisions meanwhile (compile_decisions), which this one then loads."""
+    helper = None
+    if not period_map.engine_ready() and not cache.is_warm(_newton):
+        helper = _decisions_beside()
+    try:
+        period_map.compile_engine()
+        if helper is not None:
+            helper.wait(timeout=HELPER_WAIT)
+    except subprocess.TimeoutExpired:
+        pass  # (compile_decisions compiles what the helper did not save)
+    finally:
+        if helper is not None and helper.poll() is None:
+            helper.kill()
     compile_decisions()
     team = np.zeros((1, len(_TEAM)), dtype=np.int64)
     team[0, _TEAM.threads] = 1
     _rounds(_no_points(), team, 0)  # (and the _round it calls)
+
+
+def _decisions_beside():
+    """A process that compiles the solver's decisions (compile_decisions) into numba's
+    on-disk cache, where this process may use two cores or more; None where it may not,
+    or where no process can be started. Its failure costs only what this process then
+    compiles itself."""
+    try:
+        if len(os.sched_getaffinity(0)) < 2:
+            return None
+    except AttributeError:  # (no affinity on this platform)
+        if (os.cpu_count() or 1) < 2:
+            return None
+    path = os.pathsep.join([str(Path(__file__).resolve().parents[1]),
+                            os.environ.get("PYTHONPATH", "")])
+    try:
+        return subprocess.Popen(
+            [sys.executable, "-c",
+             "from harvester_sweep.orbits import compile_decisions; compile_decisions()"],
+            env={**os.environ, "PYTHONPATH": path}, stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
 
 
 def compile_decisions() -> None:
