@@ -7,12 +7,11 @@ engine, each minutes on one core. Each worker compiles its share of them (PARTS,
 by WORKER) once the tests are collected and dealt out, and then runs its tests. A part
 another worker is still compiling is waited for, not compiled again: in a worker that has
 done its share, numba's compiling of a function of such a part waits until the part is in
-the cache (and then loads it), and so does starting another process (a
-command-line test, a Dask worker, a notebook's kernel, which jupyter_client starts with
-subprocess.Popen), which would compile what it lacks. The cache is safe for processes
-that compile at once (harvester_sweep.jit), so a worker that gives up waiting only
-compiles again. Without xdist nothing is done here: the first test that needs an engine
-compiles it.
+the cache (and then loads it), and so does starting another process (a command-line test,
+a Dask worker, a notebook's kernel, which jupyter_client starts with subprocess.Popen),
+which would compile what it lacks. The cache is safe for processes that compile at once
+(harvester_sweep.jit), so a worker that gives up waiting only compiles again. Without
+xdist nothing is done here: the first test that needs an engine compiles it.
 
 The tip-mass model's part is the longer: the lane engine, then the orbit solver, which
 calls it. So the beam's worker first compiles the solver's set-up and per-point decisions,
