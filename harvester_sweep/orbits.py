@@ -1268,7 +1268,7 @@ def compile_solver() -> None:
     compile of both, with two cores or more, has a second process compile the solver's
     decisions meanwhile (compile_decisions), which this one then loads."""
     helper = None
-    if not period_map.engine_ready() and not cache.is_warm(_newton):
+    if not (period_map.engine_at_hand() or _newton.overloads or cache.holds(_newton)):
         helper = _decisions_beside()
     try:
         period_map.compile_engine()

@@ -72,6 +72,12 @@ def cache_warm() -> bool:
     return cache.is_warm(scheduler._run_threads)
 
 
+def compiled_or_cached() -> bool:
+    """Whether this process has the engine's machine code, or numba's on-disk cache holds
+    it (cache.holds)."""
+    return bool(scheduler._run_threads.overloads) or cache.holds(scheduler._run_threads)
+
+
 __all__ = [
     "BOOKED_METRICS",
     "LANE",
@@ -86,6 +92,7 @@ __all__ = [
     "STATE",
     "STATUS",
     "cache_warm",
+    "compiled_or_cached",
     "carries_tangents",
     "free_extent",
     "free_monodromy",

@@ -17,6 +17,7 @@ a run compiles only the engine of the model it uses.
 from __future__ import annotations
 
 import hashlib
+import pickle
 from pathlib import Path
 
 import numba
@@ -68,6 +69,17 @@ def flush_if_changed(entry, modules, digest=SOURCE_DIGEST) -> None:
         _FLUSHED.append(True)
     except OSError:  # an unwritable cache: numba recompiles or falls back by itself
         pass
+
+
+def holds(entry) -> bool:
+    """Whether numba's on-disk cache holds machine code of ``entry`` (a dispatcher) for its
+    present source. Unlike is_warm it reads the index, which a flush leaves empty, so it
+    answers the same in a process that flushed the cache; True where it cannot be told
+    (another numba's internals, an index being written)."""
+    try:
+        return bool(entry._cache._cache_file._load_index())
+    except (AttributeError, OSError, EOFError, pickle.UnpicklingError):
+        return True
 
 
 def is_warm(entry) -> bool:
