@@ -1267,9 +1267,7 @@ def compile_solver() -> None:
     running a point (the table's types are the same for any size of the state). A first
     compile of both, with two cores or more, has a second process compile the solver's
     decisions meanwhile (compile_decisions), which this one then loads."""
-    helper = None
-    if not (period_map.engine_at_hand() or _newton.overloads or cache.holds(_newton)):
-        helper = _decisions_beside()
+    helper = _decisions_beside() if _first_compile() else None
     try:
         period_map.compile_engine()
         if helper is not None:
@@ -1283,6 +1281,13 @@ def compile_solver() -> None:
     team = np.zeros((1, len(_TEAM)), dtype=np.int64)
     team[0, _TEAM.threads] = 1
     _rounds(_no_points(), team, 0)  # (and the _round it calls)
+
+
+def _first_compile() -> bool:
+    """Whether neither this process nor numba's on-disk cache holds the engine or the
+    solver's decisions (cache.holds: not is_warm, which says 'cold' for the rest of a
+    process that flushed the cache)."""
+    return not (period_map.engine_at_hand() or _newton.overloads or cache.holds(_newton))
 
 
 def _decisions_beside():
