@@ -408,16 +408,29 @@ def _run(args) -> int:
     for s in reversed(STATUSES[1:]):  # the worst first
         if counts[s.name]:
             print(f"harvester-sweep: warning: {counts[s.name]} of {ds['status'].size} points "
-                  f"{s.name} (status = {s.code}): {s.meaning}; {_ADVICE[s.name]}",
-                  file=sys.stderr)
+                  f"{s.name} (status = {s.code}): {s.meaning}{_work_share(ds, s.code)}; "
+                  f"{_ADVICE[s.name]}", file=sys.stderr)
     if not args.quiet:
         print(f"harvester-sweep: {ds['status'].size} points ({counts['settled']} settled) in "
               f"{ds.attrs['run_time']:.3g} s of integration: {args.output}", file=sys.stderr)
     return 0
 
 
+def _work_share(ds, code: int) -> str:
+    """'; they took N % of the sweep's RK4 steps' for the points of status ``code``, where
+    that is a tenth or more: a point that does not settle runs its whole max_periods, so
+    a few of them can take most of a sweep's time."""
+    if "rk4_steps" not in ds:
+        return ""
+    steps = ds["rk4_steps"].values.astype(float)
+    total = steps.sum()
+    share = steps[ds["status"].values == code].sum() / total if total > 0 else 0.0
+    return f"; they took {100 * share:.0f} % of the sweep's RK4 steps" if share >= 0.1 else ""
+
+
 _ADVICE = {  # what to do about the points of each status but settled
-    "not settled": "raise max_periods, or look for chaos in a bifurcation diagram",
+    "not settled": "raise max_periods to settle them, or lower it to spend less on them, or "
+                   "look for chaos in a bifurcation diagram",
     "diverged": "raise steps_per_period",
     "too stiff": "'harvester-sweep scene' with their parameters says what needs which step",
 }

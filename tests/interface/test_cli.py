@@ -127,6 +127,26 @@ def test_a_step_beyond_the_stability_bound_warns_once_per_run(tmp_path, capsys):
     assert len(more) == 1 and int(more[0].split("and ")[1].split()[0]) >= 7
 
 
+
+def test_points_that_do_not_settle_are_told_with_their_share_of_the_work(tmp_path, capsys):
+    """A point that does not settle runs its whole max_periods: the warning counting them
+    says what share of the sweep's RK4 steps they took (read here from the file), so that
+    a designer sees what max_periods costs."""
+    sweep = tmp_path / "short.toml"
+    sweep.write_text('preset = "paper"\n[parameters]\nmax_periods = 12\n[grid]\n'
+                     "gap = { start = 0.5e-6, stop = 1e-3, num = 2 }\n"
+                     "frequency = { start = 120, stop = 160, num = 4 }\n")
+    assert main(["run", str(sweep), "--output", str(tmp_path / "short.nc"), "--quiet"]) == 0
+    with xr.open_dataset(tmp_path / "short.nc") as ds:
+        steps, status = ds["rk4_steps"].values.astype(float), ds["status"].values
+    unsettled = status == 1
+    share = steps[unsettled].sum() / steps.sum()
+    assert 0 < unsettled.sum() < status.size and share >= 0.1  # (what the case is for)
+    line, = [line for line in capsys.readouterr().err.splitlines() if "not settled" in line]
+    assert f"{unsettled.sum()} of {status.size} points not settled" in line
+    assert f"they took {100 * share:.0f} % of the sweep's RK4 steps" in line
+    assert "lower it to spend less on them" in line
+
 S_CURVE = """preset = "paper"
 [parameters]
 gap = 1e-6
