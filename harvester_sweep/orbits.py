@@ -72,17 +72,7 @@ import numba
 import numpy as np
 
 from . import acceptance, accuracy, dense, period_map
-from ._engine import (
-    MAX_ORBIT_PERIOD,
-    METRIC,
-    N_RIGID,
-    NO_STOP,
-    PARAM,
-    STATE,
-    STATUS,
-    cache,
-    compiled_or_cached,
-)
+from ._engine import MAX_ORBIT_PERIOD, METRIC, N_RIGID, NO_STOP, PARAM, STATE, STATUS, cache
 from ._engine.layouts import layout
 from ._engine.scheduler import run_watched
 from .acceptance import (
@@ -1297,7 +1287,7 @@ def _first_compile() -> bool:
     """Whether neither this process nor numba's on-disk cache holds the engine or the
     solver's decisions (cache.holds: not is_warm, which says 'cold' for the rest of a
     process that flushed the cache)."""
-    return not (compiled_or_cached() or _newton.overloads or cache.holds(_newton))
+    return not (period_map.engine_at_hand() or _newton.overloads or cache.holds(_newton))
 
 
 def _decisions_beside():

@@ -282,6 +282,11 @@ def engine_ready() -> bool:
     return _engine.cache_warm()
 
 
+def engine_at_hand() -> bool:
+    """Whether this process has the engine, or can load it from numba's on-disk cache."""
+    return _engine.compiled_or_cached()
+
+
 @dataclass
 class Evaluation:
     """One request of a :class:`Batch`, run: n points, each alone or with its copies.
