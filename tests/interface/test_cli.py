@@ -127,7 +127,6 @@ def test_a_step_beyond_the_stability_bound_warns_once_per_run(tmp_path, capsys):
     assert len(more) == 1 and int(more[0].split("and ")[1].split()[0]) >= 7
 
 
-
 def test_points_that_do_not_settle_are_told_with_their_share_of_the_work(tmp_path, capsys):
     """A point that does not settle runs its whole max_periods: the warning counting them
     says what share of the sweep's RK4 steps they took (read here from the file), so that
@@ -146,6 +145,7 @@ def test_points_that_do_not_settle_are_told_with_their_share_of_the_work(tmp_pat
     assert f"{unsettled.sum()} of {status.size} points not settled" in line
     assert f"they took {100 * share:.0f} % of the sweep's RK4 steps" in line
     assert "lower it to spend less on them" in line
+
 
 S_CURVE = """preset = "paper"
 [parameters]
