@@ -420,8 +420,6 @@ def _work_share(ds, code: int) -> str:
     """'; they took N % of the sweep's RK4 steps' for the points of status ``code``, where
     that is a tenth or more: a point that does not settle runs its whole max_periods, so
     a few of them can take most of a sweep's time."""
-    if "rk4_steps" not in ds:
-        return ""
     steps = ds["rk4_steps"].values.astype(float)
     total = steps.sum()
     share = steps[ds["status"].values == code].sum() / total if total > 0 else 0.0
